@@ -1,0 +1,126 @@
+#include "mesh/mesh_topology.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace visproxy {
+namespace {
+
+// Union-find with path halving and union by size.
+class DisjointSets {
+ public:
+  explicit DisjointSets(std::size_t count) : parent_(count), size_(count, 1) {
+    std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
+  }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a == b) return;
+    if (size_[a] < size_[b]) std::swap(a, b);
+    parent_[b] = a;
+    size_[a] += size_[b];
+  }
+
+ private:
+  std::vector<std::uint32_t> parent_;
+  std::vector<std::uint32_t> size_;
+};
+
+struct HalfEdge {
+  std::uint64_t key;    // (smaller vertex << 32) | larger vertex
+  std::uint32_t corner;  // 3 * triangle + k: the edge runs from corner k to corner k+1
+  bool forward;          // runs from the smaller vertex to the larger
+};
+
+}  // namespace
+
+MeshTopology analyze_topology(const TriangleMesh& mesh) {
+  MeshTopology topology;
+  const std::size_t triangle_count = mesh.triangles.size();
+
+  std::vector<HalfEdge> half_edges;
+  half_edges.reserve(3 * triangle_count);
+  for (std::size_t t = 0; t < triangle_count; ++t)
+    for (std::uint32_t k = 0; k < 3; ++k) {
+      const VertexIndex from = mesh.triangles[t][k];
+      const VertexIndex to = mesh.triangles[t][(k + 1) % 3];
+      if (from == to) continue;
+      const std::uint64_t low = std::min(from, to);
+      const std::uint64_t high = std::max(from, to);
+      half_edges.push_back({(low << 32) | high, static_cast<std::uint32_t>(3 * t + k), from < to});
+    }
+  std::sort(half_edges.begin(), half_edges.end(),
+            [](const HalfEdge& a, const HalfEdge& b) { return a.key != b.key ? a.key < b.key : a.corner < b.corner; });
+
+  // Corners around a vertex are joined across two-triangle edges; more than one group
+  // left at a vertex means the vertex is non-manifold.
+  DisjointSets corner_fans(3 * triangle_count);
+  auto corner_of = [&](std::uint32_t corner, VertexIndex vertex) {
+    const std::uint32_t base = corner - corner % 3;
+    for (std::uint32_t k = 0; k < 3; ++k)
+      if (mesh.triangles[base / 3][k] == vertex) return base + k;
+    return corner;
+  };
+  for (std::size_t begin = 0; begin < half_edges.size();) {
+    std::size_t end = begin;
+    while (end < half_edges.size() && half_edges[end].key == half_edges[begin].key) ++end;
+    const std::size_t incident = end - begin;
+    ++topology.edges;
+    if (incident == 1) ++topology.boundary_edges;
+    if (incident > 2) ++topology.non_manifold_edges;
+    if (incident == 2) {
+      const HalfEdge& a = half_edges[begin];
+      const HalfEdge& b = half_edges[begin + 1];
+      if (a.forward == b.forward) ++topology.inconsistent_edges;
+      const auto low = static_cast<VertexIndex>(a.key >> 32);
+      const auto high = static_cast<VertexIndex>(a.key & 0xFFFFFFFFu);
+      corner_fans.unite(corner_of(a.corner, low), corner_of(b.corner, low));
+      corner_fans.unite(corner_of(a.corner, high), corner_of(b.corner, high));
+    }
+    begin = end;
+  }
+
+  std::vector<std::pair<VertexIndex, std::uint32_t>> vertex_fans;  // (vertex, fan) for every corner
+  vertex_fans.reserve(3 * triangle_count);
+  for (std::uint32_t corner = 0; corner < 3 * triangle_count; ++corner)
+    vertex_fans.emplace_back(mesh.triangles[corner / 3][corner % 3], corner_fans.find(corner));
+  std::sort(vertex_fans.begin(), vertex_fans.end());
+  vertex_fans.erase(std::unique(vertex_fans.begin(), vertex_fans.end()), vertex_fans.end());
+  for (std::size_t i = 0; i < vertex_fans.size(); ++i) {
+    const bool first_of_vertex = i == 0 || vertex_fans[i - 1].first != vertex_fans[i].first;
+    if (first_of_vertex) {
+      ++topology.referenced_vertices;
+    } else if (vertex_fans[i - 1].first == vertex_fans[i].first &&
+               (i < 2 || vertex_fans[i - 2].first != vertex_fans[i].first)) {
+      ++topology.non_manifold_vertices;  // count each vertex once, at its second fan
+    }
+  }
+
+  triangle_components(mesh, &topology.components);
+  return topology;
+}
+
+std::vector<std::uint32_t> triangle_components(const TriangleMesh& mesh, std::size_t* component_count) {
+  DisjointSets vertex_sets(mesh.positions.size());
+  for (const Triangle& triangle : mesh.triangles) {
+    vertex_sets.unite(triangle[0], triangle[1]);
+    vertex_sets.unite(triangle[0], triangle[2]);
+  }
+  constexpr std::uint32_t kUnassigned = UINT32_MAX;
+  std::vector<std::uint32_t> component_of_root(mesh.positions.size(), kUnassigned);
+  std::vector<std::uint32_t> components(mesh.triangles.size());
+  std::uint32_t count = 0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    std::uint32_t& id = component_of_root[vertex_sets.find(mesh.triangles[t][0])];
+    if (id == kUnassigned) id = count++;
+    components[t] = id;
+  }
+  if (component_count != nullptr) *component_count = count;
+  return components;
+}
+
+}  // namespace visproxy

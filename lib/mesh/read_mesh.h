@@ -1,0 +1,58 @@
+#pragma once
+// Reading triangle meshes from OBJ, PLY, OFF and STL.
+//
+// The readers are written for speed (one pass over the bytes, std::from_chars) and for
+// hostile input: every count in a header is checked against the file size before
+// anything is allocated, every index is range-checked, every coordinate must be finite.
+// Anything wrong throws InvalidInputError naming the file (and line, for text formats).
+
+#include <filesystem>
+#include <optional>
+#include <string_view>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+enum class MeshFormat { obj, ply, off, stl };
+
+/// "OBJ", "PLY", "OFF" or "STL".
+std::string_view format_name(MeshFormat format);
+
+/// The format implied by a file's extension (case-insensitive), or nullopt if unknown.
+std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path);
+
+enum class Weld {
+  automatic,  ///< merge identical vertices for STL only, which stores each triangle's corners apart
+  never,      ///< keep the vertices as the file lists them
+  always,     ///< merge vertices with identical coordinates in every format
+};
+
+struct ReadMeshOptions {
+  Weld weld = Weld::automatic;
+};
+
+/// Reads a mesh, choosing the format from the extension.
+/// - OBJ: `v` and `f` records; polygons are triangulated (ear clipping in the polygon's
+///   plane, a fan for polygons of more than 256 corners); `i`, `i/t`, `i//n`, `i/t/n`
+///   and negative (relative) indices; any number of objects and groups, concatenated.
+/// - PLY: ascii, binary_little_endian and binary_big_endian; any scalar type for x, y, z;
+///   any count and index type for the face list (`vertex_indices` or `vertex_index`);
+///   other elements and properties are skipped.
+/// - OFF: OFF, COFF, NOFF, CNOFF, STOFF headers; `#` comments; per-vertex and per-face
+///   extras (colours) ignored; polygons triangulated as for OBJ.
+/// - STL: ASCII and binary (recognised by size, whatever the header says).
+/// Throws IOError if the file cannot be read and InvalidInputError if its content is
+/// wrong, including a mesh without a single face.
+TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions& options = {});
+
+/// Parses a mesh held in memory; `source` names it in error messages.
+TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::filesystem::path& source,
+                        const ReadMeshOptions& options = {});
+
+/// Merges vertices with bit-identical coordinates (+0 and -0 are the same) into the first
+/// one listed and drops vertices no triangle uses. Triangles are kept as they are, so a
+/// triangle whose corners merge becomes degenerate rather than disappearing.
+TriangleMesh weld_vertices(const TriangleMesh& mesh);
+
+}  // namespace visproxy

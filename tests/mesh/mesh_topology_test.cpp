@@ -1,0 +1,83 @@
+#include "mesh/mesh_topology.h"
+
+#include <gtest/gtest.h>
+
+#include "test_meshes.h"
+
+namespace visproxy {
+namespace {
+
+TEST(MeshTopology, ClosedTetrahedronAndCube) {
+  for (const TriangleMesh& mesh : {testing::tetrahedron(), testing::unit_cube()}) {
+    const MeshTopology topology = analyze_topology(mesh);
+    EXPECT_TRUE(topology.closed());
+    EXPECT_TRUE(topology.manifold());
+    EXPECT_TRUE(topology.consistently_oriented());
+    EXPECT_EQ(topology.components, 1u);
+    EXPECT_EQ(topology.euler_characteristic(mesh.triangles.size()), 2);
+  }
+  EXPECT_EQ(analyze_topology(testing::unit_cube()).edges, 18u);
+}
+
+TEST(MeshTopology, OpenMeshHasBoundaryEdges) {
+  TriangleMesh mesh = testing::tetrahedron();
+  mesh.triangles.pop_back();
+  const MeshTopology topology = analyze_topology(mesh);
+  EXPECT_EQ(topology.boundary_edges, 3u);
+  EXPECT_FALSE(topology.closed());
+  EXPECT_TRUE(topology.manifold());
+}
+
+TEST(MeshTopology, FlippedTriangleMakesThreeInconsistentEdges) {
+  TriangleMesh mesh = testing::tetrahedron();
+  std::swap(mesh.triangles[3][0], mesh.triangles[3][1]);
+  EXPECT_EQ(analyze_topology(mesh).inconsistent_edges, 3u);
+}
+
+TEST(MeshTopology, ThreeTrianglesOnOneEdgeAreNonManifold) {
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  const MeshTopology topology = analyze_topology(mesh);
+  EXPECT_EQ(topology.non_manifold_edges, 1u);
+  EXPECT_FALSE(topology.manifold());
+}
+
+TEST(MeshTopology, TwoTetrahedraTouchingAtAVertexMakeOneNonManifoldVertex) {
+  TriangleMesh mesh = testing::tetrahedron();
+  const TriangleMesh other = testing::tetrahedron();
+  // Second tetrahedron mirrored through the origin, sharing vertex 0.
+  for (std::size_t v = 1; v < 4; ++v) mesh.positions.push_back(-other.positions[v]);
+  for (Triangle t : other.triangles) {
+    for (VertexIndex& i : t) i = i == 0 ? 0 : i + 3;
+    mesh.triangles.push_back(t);
+  }
+  const MeshTopology topology = analyze_topology(mesh);
+  EXPECT_EQ(topology.non_manifold_vertices, 1u);
+  EXPECT_EQ(topology.non_manifold_edges, 0u);
+  EXPECT_EQ(topology.components, 1u);  // joined by the shared vertex
+  EXPECT_TRUE(topology.closed());
+}
+
+TEST(MeshTopology, ComponentsAndUnreferencedVertices) {
+  TriangleMesh mesh = testing::tetrahedron();
+  const TriangleMesh cube = testing::unit_cube();
+  const auto offset = static_cast<VertexIndex>(mesh.positions.size());
+  mesh.positions.push_back({9, 9, 9});  // unreferenced
+  for (const Vertex& p : cube.positions) mesh.positions.push_back(p + Vertex(5, 0, 0));
+  for (Triangle t : cube.triangles) {
+    for (VertexIndex& i : t) i += offset + 1;
+    mesh.triangles.push_back(t);
+  }
+  std::size_t count = 0;
+  const auto components = triangle_components(mesh, &count);
+  EXPECT_EQ(count, 2u);
+  EXPECT_EQ(components.front(), 0u);
+  EXPECT_EQ(components.back(), 1u);
+  const MeshTopology topology = analyze_topology(mesh);
+  EXPECT_EQ(topology.components, 2u);
+  EXPECT_EQ(topology.referenced_vertices, mesh.positions.size() - 1);
+}
+
+}  // namespace
+}  // namespace visproxy

@@ -1,0 +1,61 @@
+#include "mesh/write_mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/errors.h"
+#include "core/files.h"
+#include "mesh/read_mesh.h"
+#include "test_meshes.h"
+
+namespace visproxy {
+namespace {
+
+class WriteMesh : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = std::filesystem::temp_directory_path() /
+              ("visproxy-write-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(folder_);
+    std::filesystem::create_directories(folder_);
+  }
+  void TearDown() override { std::filesystem::remove_all(folder_); }
+  std::filesystem::path folder_;
+};
+
+// Coordinates that no float holds and that need all 17 significant digits.
+TriangleMesh awkward_mesh() {
+  TriangleMesh mesh = testing::tetrahedron();
+  mesh.positions[1] = {0.1, 1.0 / 3.0, -std::nextafter(2.0, 3.0)};
+  mesh.positions[2] = {1e-300, -7.5e200, std::ldexp(1.0, -1070)};  // a subnormal too
+  return mesh;
+}
+
+TEST_F(WriteMesh, PlyAndObjRoundTripExactly) {
+  const TriangleMesh mesh = awkward_mesh();
+  for (const char* name : {"mesh.ply", "mesh.obj"}) {
+    const auto path = folder_ / name;
+    write_mesh(path, mesh);
+    EXPECT_EQ(read_mesh(path, {.weld = Weld::never}), mesh) << name;
+  }
+}
+
+TEST_F(WriteMesh, LeavesNoTemporaryFilesAndReplacesAtomically) {
+  const auto path = folder_ / "mesh.ply";
+  write_mesh(path, testing::unit_cube());
+  write_mesh(path, testing::tetrahedron());
+  EXPECT_EQ(read_mesh(path), testing::tetrahedron());
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(folder_)) ++files;
+  EXPECT_EQ(files, 1u);
+}
+
+TEST_F(WriteMesh, RejectsUnknownExtensionAndMissingFolder) {
+  EXPECT_THROW(write_mesh(folder_ / "mesh.off", testing::unit_cube()), InvalidInputError);
+  EXPECT_THROW(write_mesh(folder_ / "missing" / "mesh.ply", testing::unit_cube()), IOError);
+}
+
+}  // namespace
+}  // namespace visproxy
