@@ -1,0 +1,14 @@
+#pragma once
+// Subcommands of the visproxy CLI. Each adds itself to the app; its callback throws
+// visproxy::Error for bad input and stores the process exit code in `exit_code`.
+
+#include <CLI/CLI.hpp>
+
+namespace visproxy::cli {
+
+/// Exit codes shared by every subcommand.
+enum ExitCode : int { kSuccess = 0, kCheckFailed = 1, kBadInput = 2, kInternalError = 3 };
+
+void add_info_command(CLI::App& app, int& exit_code);
+
+}  // namespace visproxy::cli

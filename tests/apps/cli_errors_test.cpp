@@ -1,0 +1,125 @@
+// Bad input to `visproxy info`: exit code 2, one line on stderr naming the file and the
+// problem, nothing on stdout.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "apps/cli_test_support.h"
+
+namespace visproxy {
+namespace {
+
+struct Malformed {
+  const char* file;     // name inside the test folder
+  std::string content;  // written unless `create` is false
+  const char* problem;  // fragment the message must contain
+  bool create = true;
+};
+
+std::string binary_garbage(std::size_t size) {
+  std::string bytes(size, '\0');
+  std::uint32_t state = 12345;  // fixed seed: the same garbage every run
+  for (char& c : bytes) {
+    state = state * 1664525u + 1013904223u;
+    c = static_cast<char>(state >> 24);
+  }
+  return bytes;
+}
+
+const std::string kPlyHeader =
+    "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+    "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+void PrintTo(const Malformed& input, std::ostream* out) { *out << input.file; }
+
+class CliRejects : public ::testing::TestWithParam<Malformed> {
+ protected:
+  static void SetUpTestSuite() {
+    folder_ = std::filesystem::temp_directory_path() / ("visproxy-cli-malformed-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(folder_);
+    std::filesystem::create_directories(folder_ / "folder.off");
+  }
+  static void TearDownTestSuite() { std::filesystem::remove_all(folder_); }
+  static std::filesystem::path folder_;
+};
+std::filesystem::path CliRejects::folder_;
+
+TEST_P(CliRejects, WithExitCodeTwoAndOneLineNamingTheFile) {
+  const Malformed& input = GetParam();
+  const auto path = folder_ / input.file;
+  if (input.create) std::ofstream(path, std::ios::binary) << input.content;
+  const auto result = testing::run_visproxy("info '" + path.string() + "'");
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_TRUE(result.out.empty()) << result.out;
+  ASSERT_FALSE(result.err.empty());
+  EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "exactly one line: " << result.err;
+  EXPECT_NE(result.err.find(path.string()), std::string::npos) << "names the file: " << result.err;
+  EXPECT_NE(result.err.find(input.problem), std::string::npos) << result.err;
+  if (input.create) {
+    std::ifstream check(path, std::ios::binary);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(check), {}), input.content) << "the input is untouched";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Info, CliRejects,
+    ::testing::Values(
+        Malformed{"empty.off", "", "the file is empty"},
+        Malformed{"truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n", "header claims 4 vertices and 2 faces"},
+        Malformed{"malformed.obj", "v 0 0 0\nv 1 0 0\nv 0 one 0\nf 1 2 3\n", ":3: expected vertex y, found 'one'"},
+        Malformed{"index-out-of-range.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+                  "a vertex index 7 is out of range"},
+        Malformed{"nan.off", "OFF\n3 1 0\n0 0 0\n1 NaN 0\n0 1 0\n3 0 1 2\n", "vertex y is not finite"},
+        Malformed{"inf.obj", "v 0 0 0\nv 1 0 inf\nv 0 1 0\nf 1 2 3\n", "vertex z is not finite"},
+        Malformed{"huge-header.off", "OFF\n1000000000000 1000000000000 0\n0 0 0\n", "header claims 1000000000000 vertices"},
+        Malformed{"huge-header.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 1000000000000\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+                  "header claims 1000000000000 'vertex' elements"},
+        Malformed{"truncated-binary.ply", kPlyHeader + std::string(36, '\0') + "\x03", "truncated"},
+        Malformed{"garbage.stl", binary_garbage(1000), "binary STL header claims"},
+        Malformed{"garbage.off", binary_garbage(1000), "binary data"},
+        Malformed{"garbage.ply", binary_garbage(1000), "does not start with 'ply'"},
+        Malformed{"garbage.obj", "v 1 2 3\n" + binary_garbage(200), "binary data"},
+        Malformed{"truncated.stl", "solid part\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
+                  "expected 'vertex' or 'endloop'"},
+        Malformed{"no-faces.obj", "v 0 0 0\nv 1 0 0\n", "contains no faces"},
+        Malformed{"bad-format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format"},
+        Malformed{"model.3ds", "3DS", "unknown mesh file extension '.3ds'"},
+        Malformed{"missing.off", "", "cannot open", false},
+        Malformed{"folder.off", "", "not a regular file", false}),
+    [](const ::testing::TestParamInfo<Malformed>& param_info) {
+      std::string name = param_info.param.file;
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
+
+TEST(Cli, UsageErrorsExitWithTwo) {
+  EXPECT_EQ(testing::run_visproxy("").exit_code, 2);
+  EXPECT_EQ(testing::run_visproxy("frobnicate").exit_code, 2);
+  EXPECT_EQ(testing::run_visproxy("info").exit_code, 2);
+  const auto result = testing::run_visproxy("info x.off --weld sometimes");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("--weld"), std::string::npos) << result.err;
+}
+
+TEST(Cli, HelpAndVersionExitWithZero) {
+  const auto help = testing::run_visproxy("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("info"), std::string::npos);
+  EXPECT_NE(help.out.find("Exit codes"), std::string::npos);
+  const auto info_help = testing::run_visproxy("info --help");
+  EXPECT_EQ(info_help.exit_code, 0);
+  EXPECT_NE(info_help.out.find("--json"), std::string::npos);
+  EXPECT_NE(info_help.out.find("--weld"), std::string::npos);
+  EXPECT_EQ(testing::run_visproxy("--version").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace visproxy
