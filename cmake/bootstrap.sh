@@ -1,0 +1,46 @@
+#!/bin/sh
+# One-step set-up for a fresh Debian 12 machine (run as root, or as a user with sudo).
+#
+#   cmake/bootstrap.sh demo   install missing packages, build (Release), run the main job
+#   cmake/bootstrap.sh test   install missing packages, build (Release), run the test suite
+#
+# Only packages that are missing are installed. With CI set in the environment, compiler
+# warnings are errors.
+set -eu
+mode=${1:-demo}
+case "$mode" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
+cd "$(dirname "$0")/.."
+
+packages="build-essential cmake ninja-build ccache pkg-config
+  libcgal-dev libtet1.5-dev libopenmesh-dev libembree-dev libeigen3-dev libtbb-dev
+  nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev"
+
+missing=""
+for package in $packages; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing="$missing $package"
+done
+
+as_root() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
+}
+
+# The meshes come from the libcgal-demo package (downloaded, not installed): apt needs
+# package lists for that even when nothing is missing.
+if [ -n "$missing" ] || ! apt-cache show libcgal-demo >/dev/null 2>&1; then
+  as_root apt-get update
+fi
+if [ -n "$missing" ]; then
+  echo "visproxy: installing$missing"
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $missing
+fi
+
+werror=OFF
+[ -n "${CI:-}" ] && werror=ON
+cmake --preset release -DVISPROXY_WARNINGS_AS_ERRORS=$werror
+cmake --build --preset release
+
+if [ "$mode" = demo ]; then
+  ./build/release/apps/visproxy info build/release/meshes/bunny00.off
+else
+  ctest --preset release
+fi
