@@ -26,7 +26,8 @@ if [ ! -s "$archive" ]; then
     mkdir -p "$cache"
     deb=$(ls "$cache"/libcgal-demo_*.deb 2>/dev/null | head -n 1 || true)
     if [ -z "$deb" ]; then
-      (cd "$cache" && apt-get download libcgal-demo >/dev/null) || {
+      (cd "$cache" && apt-get download libcgal-demo >/dev/null 2>apt-get.log) || {
+        cat "$cache/apt-get.log" >&2
         echo "fetch_cgal_meshes: 'apt-get download libcgal-demo' failed; run 'apt-get update' first" >&2
         exit 1
       }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -125,8 +126,9 @@ class BodyReader {
   std::uint64_t index(Scalar type, std::string_view what, std::uint64_t limit) {
     const double value = encoding_ == Encoding::ascii ? text_.read_number(what) : binary_.read(type, what);
     if (!(value >= 0) || value != std::floor(value) || value >= static_cast<double>(limit)) {
-      const std::string shown = std::isfinite(value) ? std::to_string(static_cast<long long>(value)) : "non-finite";
-      fail(std::string(what) + " " + shown + " is out of range (" + std::to_string(limit) + " allowed)");
+      char shown[32];
+      std::snprintf(shown, sizeof shown, "%.17g", value);
+      fail(std::string(what) + " " + std::string(shown) + " is out of range (" + std::to_string(limit) + " allowed)");
     }
     return static_cast<std::uint64_t>(value);
   }

@@ -5,9 +5,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "apps/cli_test_support.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
@@ -35,20 +35,11 @@ const std::string kPlyHeader =
 
 void PrintTo(const Malformed& input, std::ostream* out) { *out << input.file; }
 
-class CliRejects : public ::testing::TestWithParam<Malformed> {
- protected:
-  static void SetUpTestSuite() {
-    folder_ = std::filesystem::temp_directory_path() / ("visproxy-cli-malformed-" + std::to_string(::getpid()));
-    std::filesystem::remove_all(folder_);
-    std::filesystem::create_directories(folder_ / "folder.off");
-  }
-  static void TearDownTestSuite() { std::filesystem::remove_all(folder_); }
-  static std::filesystem::path folder_;
-};
-std::filesystem::path CliRejects::folder_;
+class CliRejects : public testing::ScratchFolder, public ::testing::WithParamInterface<Malformed> {};
 
 TEST_P(CliRejects, WithExitCodeTwoAndOneLineNamingTheFile) {
   const Malformed& input = GetParam();
+  std::filesystem::create_directory(folder_ / "folder.off");
   const auto path = folder_ / input.file;
   if (input.create) std::ofstream(path, std::ios::binary) << input.content;
   const auto result = testing::run_visproxy("info '" + path.string() + "'");
@@ -93,12 +84,7 @@ INSTANTIATE_TEST_SUITE_P(
         Malformed{"model.3ds", "3DS", "unknown mesh file extension '.3ds'"},
         Malformed{"missing.off", "", "cannot open", false},
         Malformed{"folder.off", "", "not a regular file", false}),
-    [](const ::testing::TestParamInfo<Malformed>& param_info) {
-      std::string name = param_info.param.file;
-      for (char& c : name)
-        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-      return name;
-    });
+    [](const ::testing::TestParamInfo<Malformed>& param_info) { return testing::test_name_from(param_info.param.file); });
 
 TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(testing::run_visproxy("").exit_code, 2);

@@ -5,24 +5,12 @@
 #include <filesystem>
 
 #include "core/errors.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
 
-class Files : public ::testing::Test {
- protected:
-  void SetUp() override {
-    folder_ = std::filesystem::temp_directory_path() /
-              ("visproxy-files-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    std::filesystem::remove_all(folder_);
-    std::filesystem::create_directories(folder_);
-  }
-  void TearDown() override { std::filesystem::remove_all(folder_); }
-  std::size_t entries() const {
-    return static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(folder_), {}));
-  }
-  std::filesystem::path folder_;
-};
+using Files = testing::ScratchFolder;
 
 TEST_F(Files, WriteThenReadReturnsTheSameBytes) {
   const std::string bytes("binary\0data\n", 12);

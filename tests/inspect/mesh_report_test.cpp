@@ -6,6 +6,7 @@
 #include "core/files.h"
 #include "mesh/read_mesh.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
@@ -102,12 +103,7 @@ INSTANTIATE_TEST_SUITE_P(LibCgalDemo, RealMeshVerdicts,
                                            Verdict{"knot1.off", true, false}, Verdict{"sphere.stl", true, false},
                                            Verdict{"elephant-with-holes.off", false, true},
                                            Verdict{"ChineseDragon-10kv.off", false, true}),
-                         [](const ::testing::TestParamInfo<Verdict>& param_info) {
-                           std::string name = param_info.param.file;
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+                         [](const ::testing::TestParamInfo<Verdict>& param_info) { return testing::test_name_from(param_info.param.file); });
 
 TEST(MeshReport, ChineseDragonHasItsSixBorderEdges) {
   const MeshReport report = inspect_mesh(read_mesh(testing::cgal_mesh("ChineseDragon-10kv.off")));

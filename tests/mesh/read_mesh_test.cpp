@@ -205,6 +205,11 @@ INSTANTIATE_TEST_SUITE_P(
                  "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n",
                  "out of range"},
+        BadInput{"ply_huge_list_length", MeshFormat::ply,
+                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                 "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                 "30000000000000000000000000000000000 0 1 2\n",
+                 "is out of range (44 allowed)"},
         BadInput{"ply_point_cloud", MeshFormat::ply,
                  "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
                  "end_header\n0 0 0\n",

@@ -5,6 +5,7 @@
 #include "mesh/read_mesh.h"
 #include "mesh/write_mesh.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
@@ -34,12 +35,7 @@ INSTANTIATE_TEST_SUITE_P(LibCgalDemo, RealMeshes,
                                            RealMesh{"ChineseDragon-10kv.off", 10000, 19994},
                                            RealMesh{"elephant-with-holes.off", 2798, 4463},
                                            RealMesh{"sphere.ply", 162, 320}, RealMesh{"sphere.stl", 162, 320}),
-                         [](const ::testing::TestParamInfo<RealMesh>& param_info) {
-                           std::string name = param_info.param.file;
-                           for (char& c : name)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return name;
-                         });
+                         [](const ::testing::TestParamInfo<RealMesh>& param_info) { return testing::test_name_from(param_info.param.file); });
 
 }  // namespace
 }  // namespace visproxy

@@ -9,21 +9,12 @@
 #include "core/files.h"
 #include "mesh/read_mesh.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
 
-class WriteMesh : public ::testing::Test {
- protected:
-  void SetUp() override {
-    folder_ = std::filesystem::temp_directory_path() /
-              ("visproxy-write-" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    std::filesystem::remove_all(folder_);
-    std::filesystem::create_directories(folder_);
-  }
-  void TearDown() override { std::filesystem::remove_all(folder_); }
-  std::filesystem::path folder_;
-};
+using WriteMesh = testing::ScratchFolder;
 
 // Coordinates that no float holds and that need all 17 significant digits.
 TriangleMesh awkward_mesh() {
@@ -47,9 +38,7 @@ TEST_F(WriteMesh, LeavesNoTemporaryFilesAndReplacesAtomically) {
   write_mesh(path, testing::unit_cube());
   write_mesh(path, testing::tetrahedron());
   EXPECT_EQ(read_mesh(path), testing::tetrahedron());
-  std::size_t files = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(folder_)) ++files;
-  EXPECT_EQ(files, 1u);
+  EXPECT_EQ(entries(), 1u);
 }
 
 TEST_F(WriteMesh, RejectsUnknownExtensionAndMissingFolder) {
