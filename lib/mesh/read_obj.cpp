@@ -31,7 +31,7 @@ TriangleMesh parse_obj(std::string_view bytes, const std::filesystem::path& sour
           scanner.fail("face corner " + quote_token(word) + " does not start with a vertex index");
         if (index == 0) scanner.fail("face corner refers to vertex 0; OBJ indices start at 1");
         if (index < 0) {
-          if (-index > defined)
+          if (index < -defined)
             scanner.fail("relative index " + std::to_string(index) + " reaches before the first vertex (" +
                          std::to_string(defined) + " defined so far)");
           index += defined;

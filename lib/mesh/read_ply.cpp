@@ -208,15 +208,16 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
   if (vertex_element == nullptr) header.fail("the header declares no 'vertex' element");
   if (face_element == nullptr || face_element->count == 0) throw InvalidInputError(source, "contains no faces");
 
+  static constexpr const char* kAxisNames[3] = {"x", "y", "z"};
   int coordinate_property[3] = {-1, -1, -1};
   for (std::size_t p = 0; p < vertex_element->properties.size(); ++p) {
     const Property& property = vertex_element->properties[p];
     for (int axis = 0; axis < 3; ++axis)
-      if (property.name == std::string_view("xyz" + axis, 1) && !property.is_list) coordinate_property[axis] = static_cast<int>(p);
+      if (property.name == kAxisNames[axis] && !property.is_list) coordinate_property[axis] = static_cast<int>(p);
   }
   for (int axis = 0; axis < 3; ++axis)
     if (coordinate_property[axis] < 0)
-      header.fail(std::string("the vertex element has no scalar '") + "xyz"[axis] + "' property");
+      header.fail(std::string("the vertex element has no scalar '") + kAxisNames[axis] + "' property");
   int index_property = -1;
   for (std::size_t p = 0; p < face_element->properties.size(); ++p) {
     const Property& property = face_element->properties[p];

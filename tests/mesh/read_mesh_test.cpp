@@ -183,6 +183,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadInput{"off_no_faces", MeshFormat::off, "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces"},
         BadInput{"obj_zero_index", MeshFormat::obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "vertex 0"},
         BadInput{"obj_relative_too_far", MeshFormat::obj, "v 0 0 0\nf -1 -2 -3\n", "before the first vertex"},
+        BadInput{"obj_most_negative_index", MeshFormat::obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n",
+                 "before the first vertex"},
         BadInput{"obj_out_of_range", MeshFormat::obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "refers to vertex 8"},
         BadInput{"obj_bad_number", MeshFormat::obj, "v 0 zero 0\n", "vertex y"},
         BadInput{"obj_short_vertex", MeshFormat::obj, "v 0 0\n", "vertex z"},
