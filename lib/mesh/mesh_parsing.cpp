@@ -60,9 +60,14 @@ std::string_view TextScanner::token_on_line() {
   return text_.substr(start, position_ - start);
 }
 
-double TextScanner::read_number(std::string_view what, bool on_line) {
+std::string_view TextScanner::expect_token(std::string_view what, bool on_line) {
   const std::string_view word = on_line ? token_on_line() : token();
   if (word.empty()) fail("expected " + std::string(what) + ", found the end of the " + (on_line ? "line" : "file"));
+  return word;
+}
+
+double TextScanner::read_number(std::string_view what, bool on_line) {
+  const std::string_view word = expect_token(what, on_line);
   double value = 0;
   if (!parse_number(word, value)) fail("expected " + std::string(what) + ", found " + quote_token(word));
   if (!std::isfinite(value)) fail(std::string(what) + " is not finite (" + quote_token(word) + ")");
@@ -70,8 +75,7 @@ double TextScanner::read_number(std::string_view what, bool on_line) {
 }
 
 std::uint64_t TextScanner::read_count(std::string_view what, bool on_line) {
-  const std::string_view word = on_line ? token_on_line() : token();
-  if (word.empty()) fail("expected " + std::string(what) + ", found the end of the " + (on_line ? "line" : "file"));
+  const std::string_view word = expect_token(what, on_line);
   std::int64_t value = 0;
   if (!parse_integer(word, value) || value < 0)
     fail("expected " + std::string(what) + " (a non-negative integer), found " + quote_token(word));
@@ -123,7 +127,8 @@ void MeshBuilder::add_vertex(double x, double y, double z) {
 }
 
 void MeshBuilder::add_polygon(std::span<const std::uint64_t> corners) {
-  for (const std::uint64_t corner : corners) largest_index_ = std::max(largest_index_, corner);
+  const std::uint64_t largest_corner = *std::max_element(corners.begin(), corners.end());
+  largest_index_ = std::max(largest_index_, largest_corner);
   if (corners.size() == 3) {
     // Indices that do not fit are caught by the range check in finish().
     mesh_.triangles.push_back({static_cast<VertexIndex>(std::min<std::uint64_t>(corners[0], UINT32_MAX)),
@@ -131,7 +136,7 @@ void MeshBuilder::add_polygon(std::span<const std::uint64_t> corners) {
                                static_cast<VertexIndex>(std::min<std::uint64_t>(corners[2], UINT32_MAX))});
     return;
   }
-  if (largest_index_ < mesh_.positions.size()) {
+  if (largest_corner < mesh_.positions.size()) {
     scratch_.assign(corners.begin(), corners.end());
     triangulate_polygon(mesh_.positions, scratch_, mesh_.triangles);
     return;

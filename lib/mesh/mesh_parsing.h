@@ -43,6 +43,9 @@ class TextScanner {
   [[noreturn]] void fail(std::string_view problem) const;
 
  private:
+  // The next token, or a failure naming `what` at the end of the line or file.
+  std::string_view expect_token(std::string_view what, bool on_line);
+
   std::string_view text_;
   std::size_t position_ = 0;
   const std::filesystem::path& source_;

@@ -51,7 +51,8 @@ TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::fi
     case MeshFormat::stl: mesh = parsing::parse_stl(bytes, source); break;
   }
   const bool weld = options.weld == Weld::always || (options.weld == Weld::automatic && format == MeshFormat::stl);
-  return weld ? weld_vertices(mesh) : mesh;
+  if (weld) return weld_vertices(mesh);
+  return mesh;  // moved, not copied
 }
 
 TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions& options) {

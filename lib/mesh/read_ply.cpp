@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <limits>
 #include <string>
 
 #include "core/errors.h"
@@ -240,8 +239,6 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
                                           " bytes after the header can hold");
     smallest_body += element.count * smallest_item;
   }
-  if (vertex_element->count >= std::numeric_limits<VertexIndex>::max())
-    throw InvalidInputError(source, "more than 4294967294 vertices");
 
   BodyReader body(bytes, body_start, encoding, source);
   MeshBuilder builder(source);

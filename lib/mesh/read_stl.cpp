@@ -15,10 +15,18 @@ namespace {
 constexpr std::size_t kBinaryHeader = 84;
 constexpr std::size_t kBinaryTriangle = 50;
 
-TriangleMesh parse_binary_stl(std::string_view bytes, const std::filesystem::path& source) {
+// The triangle count in a binary header (the caller has checked there are 84 bytes).
+std::uint32_t binary_triangle_count(std::string_view bytes) {
   std::uint32_t count = 0;
   std::memcpy(&count, bytes.data() + 80, 4);  // little-endian on every platform we build for
-  const std::uint64_t expected = kBinaryHeader + std::uint64_t{count} * kBinaryTriangle;
+  return count;
+}
+
+std::uint64_t binary_size(std::uint32_t count) { return kBinaryHeader + std::uint64_t{count} * kBinaryTriangle; }
+
+TriangleMesh parse_binary_stl(std::string_view bytes, const std::filesystem::path& source) {
+  const std::uint32_t count = binary_triangle_count(bytes);
+  const std::uint64_t expected = binary_size(count);
   if (expected != bytes.size())
     throw InvalidInputError(source, "binary STL header claims " + std::to_string(count) + " triangles (" +
                                         std::to_string(expected) + " bytes) but the file has " +
@@ -88,11 +96,8 @@ TriangleMesh parse_ascii_stl(std::string_view bytes, const std::filesystem::path
 
 TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& source) {
   // Binary files may start with "solid" too: the size decides.
-  if (bytes.size() >= kBinaryHeader) {
-    std::uint32_t count = 0;
-    std::memcpy(&count, bytes.data() + 80, 4);
-    if (kBinaryHeader + std::uint64_t{count} * kBinaryTriangle == bytes.size()) return parse_binary_stl(bytes, source);
-  }
+  if (bytes.size() >= kBinaryHeader && binary_size(binary_triangle_count(bytes)) == bytes.size())
+    return parse_binary_stl(bytes, source);
   std::size_t start = 0;
   while (start < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[start]))) ++start;
   if (bytes.substr(start).starts_with("solid")) return parse_ascii_stl(bytes, source);
