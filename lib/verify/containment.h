@@ -1,0 +1,54 @@
+#pragma once
+// Exact containment checks: does a closed mesh contain points, or a whole surface?
+// Everything here is decided with exact predicates on the double coordinates as stored:
+// no tolerance, no rounding.
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+/// Where a point lies relative to a closed, outward-oriented container mesh.
+enum class PointLocation : std::uint8_t { inside, on_boundary, outside };
+
+/// Location of each point (#P entries) relative to `container`, by the winding number of
+/// the container around the point: a point is inside when the winding number is not zero,
+/// so a container made of several overlapping closed parts (one proxy per component)
+/// contains the union of their volumes. Points on a triangle are `on_boundary`.
+/// The winding number is counted along a ray with exact orientation predicates; rays
+/// that meet an edge or a vertex are replaced by another seeded direction.
+/// Precondition: `container` is closed (every edge has as many triangles using it one way
+/// as the other); for an open container the answer depends on the ray.
+std::vector<PointLocation> locate_points(const TriangleMesh& container, std::span<const Vertex> points);
+
+/// Pairs (container triangle, contents triangle) that intersect, exactly (touching counts).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> find_crossing_triangles(const TriangleMesh& container,
+                                                                              const TriangleMesh& contents);
+
+struct ContainmentOptions {
+  /// Also require that no triangle of the contents meets a triangle of the container.
+  /// With it, a closed container provably contains the whole contents surface, not only
+  /// its vertices (for convex containers the vertex test alone already implies that).
+  bool check_surface = true;
+};
+
+struct Containment {
+  std::size_t vertices_checked = 0;      ///< vertices the contents' triangles use
+  std::size_t vertices_outside = 0;      ///< strictly outside the container
+  std::size_t vertices_on_boundary = 0;  ///< exactly on a container triangle (still contained)
+  std::size_t crossing_triangle_pairs = 0;  ///< 0 unless check_surface found some
+  bool surface_checked = false;
+  /// Vertices inside or on, and (when checked) no surface crossings.
+  bool contained() const { return vertices_outside == 0 && crossing_triangle_pairs == 0; }
+};
+
+/// Whether closed mesh `container` contains `contents` (see ContainmentOptions).
+Containment check_containment(const TriangleMesh& container, const TriangleMesh& contents,
+                              const ContainmentOptions& options = {});
+
+}  // namespace visproxy
