@@ -1,0 +1,144 @@
+#include "proxy/proxy_spec.h"
+
+#include <charconv>
+#include <cmath>
+#include <set>
+
+#include "core/errors.h"
+
+namespace visproxy {
+namespace {
+
+[[noreturn]] void fail(std::string_view spec, std::string_view problem) {
+  throw Error("--proxy '" + std::string(spec) + "': " + std::string(problem));
+}
+
+std::size_t parse_count(std::string_view spec, std::string_view text) {
+  std::size_t value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || text.empty())
+    fail(spec, "N must be a whole number, got '" + std::string(text) + "'");
+  if (value == 0) fail(spec, "N must be at least 1");
+  if (value > 100'000'000) fail(spec, "N must be at most 100000000");
+  return value;
+}
+
+double parse_fraction(std::string_view spec, std::string_view what, std::string_view text) {
+  double value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || text.empty() || !std::isfinite(value))
+    fail(spec, std::string(what) + " must be a number, got '" + std::string(text) + "'");
+  if (value <= 0 || value > 1) fail(spec, std::string(what) + " must be in (0, 1], got " + std::string(text));
+  return value;
+}
+
+}  // namespace
+
+std::string_view kind_name(ProxyKind kind) {
+  switch (kind) {
+    case ProxyKind::outside: return "outside";
+    case ProxyKind::inside: return "inside";
+    case ProxyKind::general: return "general";
+  }
+  return "general";
+}
+
+std::string ProxySpec::name() const {
+  std::string name = text;
+  for (char& c : name)
+    if (c == ':' || c == ',') c = '-';
+  return name;
+}
+
+ProxyKind ProxySpec::kind() const {
+  switch (method) {
+    case ProxyMethod::quadric:
+    case ProxyMethod::clustering: return ProxyKind::general;
+    default: return ProxyKind::outside;
+  }
+}
+
+ProxySpec parse_proxy_spec(std::string_view text) {
+  ProxySpec spec;
+  spec.text = std::string(text);
+  const std::size_t colon = text.find(':');
+  const std::string_view method = text.substr(0, colon);
+  const bool has_argument = colon != std::string_view::npos;
+  const std::string_view argument = has_argument ? text.substr(colon + 1) : std::string_view();
+  auto require_argument = [&](std::string_view form) {
+    if (!has_argument || argument.empty()) fail(text, "expected " + std::string(form));
+  };
+  auto forbid_argument = [&]() {
+    if (has_argument) fail(text, std::string(method) + " takes no parameters");
+  };
+
+  if (method == "aabb") {
+    forbid_argument();
+    spec.method = ProxyMethod::aabb;
+  } else if (method == "obb") {
+    forbid_argument();
+    spec.method = ProxyMethod::obb;
+  } else if (method == "hull") {
+    if (has_argument) {
+      spec.method = ProxyMethod::bounded_hull;
+      spec.count = parse_count(text, argument);
+      if (spec.count < 4) fail(text, "a closed convex polytope has at least 4 faces");
+    } else {
+      spec.method = ProxyMethod::convex_hull;
+    }
+  } else if (method == "wrap") {
+    spec.method = ProxyMethod::alpha_wrap;
+    if (has_argument) {
+      std::set<std::string_view> seen;
+      std::string_view rest = argument;
+      while (true) {
+        const std::size_t comma = rest.find(',');
+        const std::string_view item = rest.substr(0, comma);
+        const std::size_t equals = item.find('=');
+        if (equals == std::string_view::npos) fail(text, "expected alpha=A and/or offset=O, got '" + std::string(item) + "'");
+        const std::string_view key = item.substr(0, equals);
+        const std::string_view value = item.substr(equals + 1);
+        if (!seen.insert(key).second) fail(text, "'" + std::string(key) + "' given twice");
+        if (key == "alpha") spec.alpha_relative = parse_fraction(text, "alpha", value);
+        else if (key == "offset") spec.offset_relative = parse_fraction(text, "offset", value);
+        else fail(text, "unknown wrap parameter '" + std::string(key) + "' (expected alpha or offset)");
+        if (comma == std::string_view::npos) break;
+        rest = rest.substr(comma + 1);
+      }
+    }
+  } else if (method == "outer") {
+    require_argument("outer:N");
+    spec.method = ProxyMethod::outer_hull;
+    spec.count = parse_count(text, argument);
+    if (spec.count < 4) fail(text, "a closed mesh has at least 4 triangles");
+  } else if (method == "quadric") {
+    require_argument("quadric:N");
+    spec.method = ProxyMethod::quadric;
+    spec.count = parse_count(text, argument);
+  } else if (method == "cluster") {
+    require_argument("cluster:F");
+    spec.method = ProxyMethod::clustering;
+    spec.cell_size_relative = parse_fraction(text, "F", argument);
+  } else {
+    fail(text, "unknown proxy '" + std::string(method) +
+                   "' (expected aabb, obb, hull, hull:N, wrap, wrap:alpha=A,offset=O, outer:N, quadric:N, cluster:F)");
+  }
+  return spec;
+}
+
+std::vector<ProxySpec> default_proxy_specs() {
+  return parse_proxy_specs({"aabb", "obb", "hull", "hull:32", "wrap", "outer:512", "quadric:512", "cluster:0.03"});
+}
+
+std::vector<ProxySpec> parse_proxy_specs(const std::vector<std::string>& texts) {
+  std::vector<ProxySpec> specs;
+  std::set<std::string> names;
+  for (const std::string& text : texts) {
+    ProxySpec spec = parse_proxy_spec(text);
+    if (!names.insert(spec.name()).second) fail(text, "the proxy '" + spec.name() + "' is asked for twice");
+    specs.push_back(std::move(spec));
+  }
+  return specs;
+}
+
+}  // namespace visproxy
