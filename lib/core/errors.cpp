@@ -15,7 +15,7 @@ std::string located(const std::filesystem::path& file, std::uint64_t line, std::
 
 InvalidInputError::InvalidInputError(const std::filesystem::path& file, std::string_view problem,
                                      std::uint64_t line)
-    : Error(located(file, line, problem)), file_(file), line_(line) {}
+    : Error(located(file, line, problem)), file_(file), line_(line), problem_(problem) {}
 
 IOError::IOError(const std::filesystem::path& file, std::string_view problem)
     : Error(located(file, 0, problem)), file_(file) {}

@@ -23,10 +23,13 @@ class InvalidInputError : public Error {
   InvalidInputError(const std::filesystem::path& file, std::string_view problem, std::uint64_t line = 0);
   const std::filesystem::path& file() const noexcept { return file_; }
   std::uint64_t line() const noexcept { return line_; }
+  /// What is wrong, without the location.
+  const std::string& problem() const noexcept { return problem_; }
 
  private:
   std::filesystem::path file_;
   std::uint64_t line_;
+  std::string problem_;
 };
 
 /// A file could not be opened, read, created or renamed. what() reads "FILE: problem".

@@ -123,4 +123,30 @@ std::vector<std::uint32_t> triangle_components(const TriangleMesh& mesh, std::si
   return components;
 }
 
+std::vector<TriangleMesh> split_components(const TriangleMesh& mesh) {
+  std::size_t count = 0;
+  const std::vector<std::uint32_t> component = triangle_components(mesh, &count);
+  std::vector<TriangleMesh> parts(count);
+  std::vector<std::uint32_t> triangles_in(count, 0);
+  for (std::uint32_t c : component) ++triangles_in[c];
+  for (std::size_t c = 0; c < count; ++c) parts[c].triangles.reserve(triangles_in[c]);
+  // A vertex belongs to exactly one component; number it there in original order.
+  constexpr VertexIndex kUnassigned = UINT32_MAX;
+  std::vector<std::uint32_t> component_of_vertex(mesh.positions.size(), kUnassigned);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (VertexIndex v : mesh.triangles[t]) component_of_vertex[v] = component[t];
+  std::vector<VertexIndex> new_index(mesh.positions.size(), kUnassigned);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (component_of_vertex[v] == kUnassigned) continue;
+    TriangleMesh& part = parts[component_of_vertex[v]];
+    new_index[v] = static_cast<VertexIndex>(part.positions.size());
+    part.positions.push_back(mesh.positions[v]);
+  }
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& triangle = mesh.triangles[t];
+    parts[component[t]].triangles.push_back({new_index[triangle[0]], new_index[triangle[1]], new_index[triangle[2]]});
+  }
+  return parts;
+}
+
 }  // namespace visproxy

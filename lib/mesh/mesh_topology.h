@@ -37,4 +37,8 @@ MeshTopology analyze_topology(const TriangleMesh& mesh);
 /// appearance); triangles that share a vertex index are in the same component.
 std::vector<std::uint32_t> triangle_components(const TriangleMesh& mesh, std::size_t* component_count = nullptr);
 
+/// One mesh per connected component (in the order of triangle_components), each holding
+/// only the vertices its triangles use, in their original order.
+std::vector<TriangleMesh> split_components(const TriangleMesh& mesh);
+
 }  // namespace visproxy

@@ -14,4 +14,11 @@ BoundingBox bounding_box(const TriangleMesh& mesh) {
   return box;
 }
 
+void append_mesh(TriangleMesh& mesh, const TriangleMesh& part) {
+  const auto base = static_cast<VertexIndex>(mesh.positions.size());
+  mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());
+  mesh.triangles.reserve(mesh.triangles.size() + part.triangles.size());
+  for (const Triangle& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+}
+
 }  // namespace visproxy

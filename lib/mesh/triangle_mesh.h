@@ -42,4 +42,7 @@ struct BoundingBox {
 /// Bounding box of the vertices that triangles use (unreferenced vertices are ignored).
 BoundingBox bounding_box(const TriangleMesh& mesh);
 
+/// Adds `part`'s vertices and triangles to `mesh` (indices shifted; nothing is welded).
+void append_mesh(TriangleMesh& mesh, const TriangleMesh& part);
+
 }  // namespace visproxy

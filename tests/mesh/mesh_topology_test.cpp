@@ -81,3 +81,29 @@ TEST(MeshTopology, ComponentsAndUnreferencedVertices) {
 
 }  // namespace
 }  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+TEST(SplitComponents, SeparatesFarApartPartsAndAppendRejoinsThem) {
+  TriangleMesh two = testing::unit_cube();
+  TriangleMesh far = testing::tetrahedron();
+  for (Vertex& p : far.positions) p += Vertex(100, 0, 0);
+  append_mesh(two, far);
+  two.positions.emplace_back(7, 7, 7);  // unreferenced: belongs to no part
+  ASSERT_EQ(two.triangles.size(), 16u);
+
+  const std::vector<TriangleMesh> parts = split_components(two);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0], testing::unit_cube());
+  EXPECT_EQ(parts[1], far);
+
+  TriangleMesh rejoined;
+  for (const TriangleMesh& part : parts) append_mesh(rejoined, part);
+  two.positions.pop_back();
+  EXPECT_EQ(rejoined, two);
+  EXPECT_TRUE(split_components(TriangleMesh{}).empty());
+}
+
+}  // namespace
+}  // namespace visproxy
