@@ -9,17 +9,23 @@
 // The error of a quadric is divided by the area it stands for (as meshoptimizer does), so
 // errors are squared distances and the order of collapses does not favour small triangles.
 //
-// Data layout: flat arrays of vertices, quadrics and triangles; each vertex owns a slice of
-// one array of incident triangle ids, re-appended after each collapse (dead triangles are
-// skipped, the array is compacted when it has grown); candidate collapses sit in a binary
-// heap with lazy deletion: an entry carries the versions of its two vertices and is dropped
-// when popped if either vertex changed since.
+// Collapses are made in passes, cheapest first, as in meshoptimizer's simplifier: a pass
+// rates every edge, sorts the rates, and collapses edges in that order up to half of the
+// triangles still over budget and up to 1.5 times the error of the collapse at the pass's
+// goal. A collapse locks every vertex of the triangles around it for the rest of the pass,
+// so each pass sees an unchanged neighbourhood around the edges it collapses and needs no
+// incremental update: incidence is rebuilt between passes over flat arrays, which is far
+// kinder to the cache than a global heap. On bunny00 to 512 triangles this measured about
+// 2.5x faster than a lazy-deletion heap of edges, with a lower sampled Hausdorff error
+// (0.0086 of the diagonal against 0.010-0.017 depending on tie-breaking), although the
+// greedy order is exact only within a pass.
 
 #include "proxy/quadric_simplify.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -42,9 +48,8 @@ constexpr double kBorderWeight = 10.0;
 constexpr double kMinRelativeDeterminant = 1e-3;
 // A collapse is a flip if a moved triangle's normal turns by this much or more (cosine).
 constexpr double kMinNormalCosine = 0.0;
-// The heap is purged of stale entries when it holds more than this many per live triangle
-// (a mesh has about 1.5 edges per triangle).
-constexpr std::size_t kStaleHeapFactor = 2;
+// A pass stops at collapses whose error exceeds this many times that of its goal collapse.
+constexpr double kPassErrorSlack = 1.5;
 constexpr std::uint32_t kDeadTriangle = std::numeric_limits<std::uint32_t>::max();
 
 // Symmetric 4x4 quadric [A b; b^T c] in its 10 distinct entries, with the area it stands for.
@@ -77,13 +82,14 @@ struct Quadric {
   }
   friend Quadric operator+(Quadric a, const Quadric& b) { return a += b; }
 
-  // Squared distance of p to the planes, averaged by weight; 0 for an empty quadric.
-  double error(const Vec3& p) const {
+  // Sum of the weighted squared distances of p to the planes.
+  double sum(const Vec3& p) const {
     const double x = p.x(), y = p.y(), z = p.z();
-    const double sum = xx * x * x + yy * y * y + zz * z * z + 2 * (xy * x * y + xz * x * z + yz * y * z) +
-                       2 * (xw * x + yw * y + zw * z) + ww;
-    return weight > 0 && sum > 0 ? sum / weight : 0.0;
+    return x * (xx * x + 2 * (xy * y + xz * z + xw)) + y * (yy * y + 2 * (yz * z + yw)) + z * (zz * z + 2 * zw) + ww;
   }
+
+  // Squared distance of p to the planes, averaged by weight; 0 for an empty quadric.
+  double error(const Vec3& p) const { return weight > 0 ? std::max(0.0, sum(p)) / weight : 0.0; }
 
   // The minimiser of the quadric if A is well-conditioned.
   bool minimiser(Vec3& out) const {
@@ -104,83 +110,29 @@ struct Placement {
   Vec3 position;
 };
 
-// A candidate collapse of edge (keep, remove) into `keep`, valid while the two vertices'
-// versions are the ones recorded (16 bits each: a version that wrapped around could let a
-// stale entry through, which only reorders one collapse, as each is re-checked when made).
-struct HeapEntry {
-  std::uint64_t key;  // float bits of the error (monotonic for errors >= 0), then keep
-  std::uint32_t remove;
-  std::uint16_t keep_version, remove_version;
+// A candidate collapse of edge (u, w), rated by the float bits of its error (which order
+// like the errors, as errors are >= 0).
+struct Candidate {
+  std::uint32_t error_bits;
+  std::uint32_t u, w;
 
-  std::uint32_t keep() const { return static_cast<std::uint32_t>(key); }
+  double error() const { return static_cast<double>(std::bit_cast<float>(error_bits)); }
 };
 
-// Min-heap of collapses with four children per node: half the depth of a binary heap, and
-// the children of a node share a cache line. Ties are broken by the keep vertex.
-class CollapseHeap {
- public:
-  bool empty() const { return entries_.empty(); }
-  std::size_t size() const { return entries_.size(); }
-  void clear() { entries_.clear(); }
+std::uint32_t error_bits(double error) { return std::bit_cast<std::uint32_t>(static_cast<float>(error)); }
 
-  static std::uint64_t key(double error, std::uint32_t keep) {
-    const auto error_bits = std::bit_cast<std::uint32_t>(static_cast<float>(error));
-    return (std::uint64_t{error_bits} << 32) | keep;
+// Sorts by error with a stable LSD radix sort (11 bits per round), so ties keep the order
+// in which the edges were listed.
+void sort_candidates(std::vector<Candidate>& candidates, std::vector<Candidate>& scratch) {
+  scratch.resize(candidates.size());
+  for (int shift = 0; shift < 32; shift += 11) {
+    std::size_t count[2049] = {};
+    for (const Candidate& c : candidates) ++count[((c.error_bits >> shift) & 2047) + 1];
+    for (std::size_t i = 1; i < 2049; ++i) count[i] += count[i - 1];
+    for (const Candidate& c : candidates) scratch[count[(c.error_bits >> shift) & 2047]++] = c;
+    candidates.swap(scratch);
   }
-
-  void push(const HeapEntry& entry) {
-    std::size_t i = entries_.size();
-    entries_.push_back(entry);
-    while (i > 0) {
-      const std::size_t parent = (i - 1) / 4;
-      if (entries_[parent].key <= entry.key) break;
-      entries_[i] = entries_[parent];
-      i = parent;
-    }
-    entries_[i] = entry;
-  }
-
-  HeapEntry pop() {
-    const HeapEntry top = entries_.front();
-    const HeapEntry last = entries_.back();
-    entries_.pop_back();
-    if (!entries_.empty()) sift_down(0, last);
-    return top;
-  }
-
-  // Pushes without ordering, then restores the heap at once with heapify().
-  void append(const HeapEntry& entry) { entries_.push_back(entry); }
-  void heapify() {
-    for (std::size_t i = entries_.size() / 4 + 1; i-- > 0;)
-      if (i < entries_.size()) sift_down(i, entries_[i]);
-  }
-
-  // Drops the entries for which `stale` holds and restores the heap.
-  template <typename Stale>
-  void remove_if(Stale&& stale) {
-    entries_.erase(std::remove_if(entries_.begin(), entries_.end(), stale), entries_.end());
-    heapify();
-  }
-
- private:
-  void sift_down(std::size_t i, const HeapEntry& entry) {
-    const std::size_t n = entries_.size();
-    for (;;) {
-      const std::size_t first = 4 * i + 1;
-      if (first >= n) break;
-      std::size_t best = first;
-      const std::size_t last = std::min(first + 4, n);
-      for (std::size_t c = first + 1; c < last; ++c)
-        if (entries_[c].key < entries_[best].key) best = c;
-      if (entry.key <= entries_[best].key) break;
-      entries_[i] = entries_[best];
-      i = best;
-    }
-    entries_[i] = entry;
-  }
-
-  std::vector<HeapEntry> entries_;
-};
+}
 
 // Interleaved bits of the coordinates of p in [-1/2, 1/2]^3 quantised to 21 bits each.
 std::uint64_t morton_code(const Vec3& p) {
@@ -212,30 +164,23 @@ class QuadricSimplifier {
   }
 
   QuadricSimplifyResult run() {
-    QuadricSimplifyResult result;
-    // Rule levels: 0 all rules, 1 flips allowed, 2 every collapse allowed.
+    // Rule levels: 0 all rules, 1 flips allowed, 2 every collapse allowed. A pass that
+    // collapses nothing is repeated without its error limit, then at the next level.
     int level = 0;
-    build_heap();
-    std::size_t collapses_at_build = 0;
+    bool limited = true;
     while (alive_triangles_ > max_triangles_) {
-      if (heap_.empty()) {
-        if (collapses_ == collapses_at_build) {
-          if (level == 2) {
-            drop_smallest_triangles();
-            break;
-          }
-          ++level;
-        }
-        build_heap();
-        collapses_at_build = collapses_;
-        continue;
+      if (run_pass(level, limited) > 0) {
+        limited = true;
+      } else if (limited) {
+        limited = false;
+      } else if (level < 2) {
+        ++level;
+        limited = true;
+      } else {
+        drop_smallest_triangles();
       }
-      if (heap_.size() > kStaleHeapFactor * alive_triangles_ + 1024)
-        heap_.remove_if([this](const HeapEntry& entry) { return stale(entry); });
-      const HeapEntry entry = heap_.pop();
-      if (stale(entry)) continue;
-      try_collapse(entry.keep(), entry.remove, level);
     }
+    QuadricSimplifyResult result;
     result.mesh = output_mesh();
     result.max_quadric_error_relative = std::sqrt(max_error_);
     result.collapses = collapses_;
@@ -259,81 +204,69 @@ class QuadricSimplifier {
           used[index] = 1;
         }
       }
-    // Representative of each used vertex: the lowest index with the same coordinates.
-    std::vector<VertexIndex> sorted;
-    for (std::size_t v = 0; v < vertex_count; ++v)
-      if (used[v]) sorted.push_back(static_cast<VertexIndex>(v));
     const auto& p = input_.positions;
-    std::sort(sorted.begin(), sorted.end(), [&p](VertexIndex a, VertexIndex b) {
-      if (p[a].x() != p[b].x()) return p[a].x() < p[b].x();
-      if (p[a].y() != p[b].y()) return p[a].y() < p[b].y();
-      if (p[a].z() != p[b].z()) return p[a].z() < p[b].z();
-      return a < b;
-    });
-    std::vector<VertexIndex> representative(vertex_count, 0);
-    for (std::size_t i = 0; i < sorted.size();) {
-      std::size_t j = i + 1;
-      while (j < sorted.size() && p[sorted[j]] == p[sorted[i]]) ++j;
-      for (std::size_t k = i; k < j; ++k) representative[sorted[k]] = sorted[i];
-      i = j;
-    }
-
     const BoundingBox box = bounding_box(input_);
     center_ = (box.min + box.max) / 2;
     diagonal_ = box.diagonal();
     const double scale = diagonal_ > 0 ? 1 / diagonal_ : 1.0;
 
-    // Working vertices in Morton order of their positions, so that neighbours are near in
-    // memory; triangles sorted by their first vertex.
+    // Used vertices in Morton order of their positions (so that neighbours are near in
+    // memory), then by index. Equal coordinates have equal codes: each run of equal
+    // coordinates within a code becomes one working vertex, the input vertex of lowest index.
     std::vector<std::pair<std::uint64_t, VertexIndex>> by_code;
-    for (std::size_t i = 0; i < sorted.size(); ++i)
-      if (representative[sorted[i]] == sorted[i])
-        by_code.emplace_back(morton_code((p[sorted[i]] - center_) * scale), sorted[i]);
+    for (std::size_t v = 0; v < vertex_count; ++v)
+      if (used[v]) by_code.emplace_back(morton_code((p[v] - center_) * scale), static_cast<VertexIndex>(v));
     std::sort(by_code.begin(), by_code.end());
     std::vector<std::uint32_t> working(vertex_count, kDeadTriangle);
-    for (const auto& [code, r] : by_code) {
-      working[r] = static_cast<std::uint32_t>(origin_.size());
-      origin_.push_back(r);
-      position_.push_back((p[r] - center_) * scale);
+    for (std::size_t i = 0; i < by_code.size(); ++i) {
+      const VertexIndex v = by_code[i].second;
+      for (std::size_t j = i; j-- > 0 && by_code[j].first == by_code[i].first;)
+        if (p[by_code[j].second] == p[v]) {
+          working[v] = working[by_code[j].second];
+          break;
+        }
+      if (working[v] != kDeadTriangle) continue;
+      working[v] = static_cast<std::uint32_t>(origin_.size());
+      origin_.push_back(v);
+      position_.push_back((p[v] - center_) * scale);
     }
-    triangles_.reserve(input_.triangles.size());
-    for (const Triangle& triangle : input_.triangles) {
-      const Triangle mapped = {working[representative[triangle[0]]], working[representative[triangle[1]]],
-                               working[representative[triangle[2]]]};
-      if (mapped[0] != mapped[1] && mapped[1] != mapped[2] && mapped[2] != mapped[0]) triangles_.push_back(mapped);
-    }
-    std::stable_sort(triangles_.begin(), triangles_.end(), [](const Triangle& a, const Triangle& b) {
-      return std::min({a[0], a[1], a[2]}) < std::min({b[0], b[1], b[2]});
-    });
-    alive_triangles_ = triangles_.size();
+
+    // Triangles without repeated corners, grouped by their lowest corner (counting sort).
     const std::size_t n = position_.size();
+    std::vector<std::uint32_t> first(n + 1, 0);
+    std::vector<Triangle> mapped;
+    mapped.reserve(input_.triangles.size());
+    for (const Triangle& triangle : input_.triangles) {
+      const Triangle t = {working[triangle[0]], working[triangle[1]], working[triangle[2]]};
+      if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) continue;
+      mapped.push_back(t);
+      ++first[std::min({t[0], t[1], t[2]}) + 1];
+    }
+    for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+    triangles_.resize(mapped.size());
+    for (const Triangle& t : mapped) triangles_[first[std::min({t[0], t[1], t[2]})]++] = t;
+    alive_triangles_ = triangles_.size();
     moved_.assign(n, 0);
-    version_.assign(n, 0);
-    vertex_alive_.assign(n, 1);
+    lock_.assign(n, 0);
     border_.assign(n, 0);
     mark_.assign(n, 0);
   }
 
-  // Incident triangles of every vertex as slices of refs_.
+  // Drops dead triangles and lists the incident triangles of every vertex as slices of refs_.
   void build_incidence() {
+    triangles_.erase(std::remove_if(triangles_.begin(), triangles_.end(),
+                                    [](const Triangle& t) { return t[0] == kDeadTriangle; }),
+                     triangles_.end());
     const std::size_t n = position_.size();
-    ref_start_.assign(n, 0);
-    ref_count_.assign(n, 0);
+    ref_start_.assign(n + 1, 0);
     for (const Triangle& t : triangles_)
-      if (t[0] != kDeadTriangle)
-        for (const std::uint32_t v : t) ++ref_count_[v];
-    std::uint32_t start = 0;
-    for (std::size_t v = 0; v < n; ++v) {
-      ref_start_[v] = start;
-      start += ref_count_[v];
-      ref_count_[v] = 0;
-    }
-    refs_.assign(start, 0);
-    refs_.reserve(std::size_t{3} * start + 1024);
+      for (const std::uint32_t v : t) ++ref_start_[v + 1];
+    for (std::size_t v = 0; v < n; ++v) ref_start_[v + 1] += ref_start_[v];
+    refs_.resize(ref_start_[n]);
     for (std::size_t t = 0; t < triangles_.size(); ++t)
-      if (triangles_[t][0] != kDeadTriangle)
-        for (const std::uint32_t v : triangles_[t]) refs_[ref_start_[v] + ref_count_[v]++] = static_cast<std::uint32_t>(t);
-    compact_at_ = refs_.capacity();
+      for (const std::uint32_t v : triangles_[t]) refs_[ref_start_[v]++] = static_cast<std::uint32_t>(t);
+    for (std::size_t v = n; v > 0; --v) ref_start_[v] = ref_start_[v - 1];
+    ref_start_[0] = 0;
   }
 
   void build_quadrics() {
@@ -349,20 +282,23 @@ class QuadricSimplifier {
       for (const std::uint32_t v : tri) quadric_[v] += q;
     }
     // Border edges: edges (u, w) that exactly one triangle has; each is seen from its lower end.
-    std::vector<std::uint32_t> count(position_.size(), 0);
+    std::vector<std::uint32_t> count(position_.size(), 0), counted_for(position_.size(), kDeadTriangle);
     for (std::uint32_t u = 0; u < position_.size(); ++u) {
       for_each_triangle(u, [&](std::uint32_t t) {
-        for (const std::uint32_t w : triangles_[t])
-          if (w != u) ++count[w];
+        for (const std::uint32_t w : triangles_[t]) {
+          if (counted_for[w] != u) counted_for[w] = u, count[w] = 0;
+          ++count[w];
+        }
       });
       for_each_triangle(u, [&](std::uint32_t t) {
         const Triangle& tri = triangles_[t];
-        for (int c = 0; c < 3; ++c) {
-          const std::uint32_t a = tri[c], b = tri[(c + 1) % 3];
-          if (a != u && b != u) continue;
-          const std::uint32_t w = a == u ? b : a;
+        const int c = corner_of(tri, u);
+        for (const int side : {1, 2}) {
+          const std::uint32_t w = tri[(c + side) % 3];
           if (w < u || count[w] != 1) continue;
           border_[u] = border_[w] = 1;
+          // The edge in the triangle's direction, u -> w or w -> u.
+          const std::uint32_t a = side == 1 ? u : w, b = side == 1 ? w : u;
           const Vec3 edge = position_[b] - position_[a];
           const Vec3 normal = edge.cross(unit_normal[t]);
           const double length = normal.norm();
@@ -373,57 +309,76 @@ class QuadricSimplifier {
           quadric_[w] += q;
         }
       });
-      for_each_triangle(u, [&](std::uint32_t t) {
-        for (const std::uint32_t w : triangles_[t]) count[w] = 0;
-      });
     }
   }
 
+  // Calls f for the triangles of v as the incidence lists have them (from the pass's start).
   template <typename F>
   void for_each_triangle(std::uint32_t v, F&& f) const {
-    const std::uint32_t* begin = refs_.data() + ref_start_[v];
-    for (const std::uint32_t* it = begin; it != begin + ref_count_[v]; ++it)
-      if (triangles_[*it][0] != kDeadTriangle) f(*it);
+    for (std::uint32_t i = ref_start_[v]; i < ref_start_[v + 1]; ++i)
+      if (triangles_[refs_[i]][0] != kDeadTriangle) f(refs_[i]);
   }
 
   Placement placement(std::uint32_t a, std::uint32_t b) const {
     const Quadric q = quadric_[a] + quadric_[b];
+    const double inverse_weight = q.weight > 0 ? 1 / q.weight : 0.0;
     const Vec3& pa = position_[a];
     const Vec3& pb = position_[b];
-    Vec3 optimum;
-    if (q.minimiser(optimum)) {
-      // Keep the optimum near the edge: far-off minimisers of nearly singular systems fold the mesh.
-      const Vec3 midpoint = (pa + pb) / 2;
-      if ((optimum - midpoint).squaredNorm() <= (pa - pb).squaredNorm()) return {q.error(optimum), optimum};
-    }
-    Placement best{q.error(pa), pa};
-    const double error_b = q.error(pb);
-    if (error_b < best.error) best = {error_b, pb};
     const Vec3 midpoint = (pa + pb) / 2;
-    const double error_mid = q.error(midpoint);
-    if (error_mid < best.error) best = {error_mid, midpoint};
-    return best;
+    Vec3 optimum;
+    // Keep the optimum near the edge: far-off minimisers of nearly singular systems fold the mesh.
+    if (q.minimiser(optimum) && (optimum - midpoint).squaredNorm() <= (pa - pb).squaredNorm()) {
+      // At the minimiser x of x^T A x + 2 b.x + c, A x = -b, so the sum is b.x + c.
+      const double sum = q.xw * optimum.x() + q.yw * optimum.y() + q.zw * optimum.z() + q.ww;
+      return {std::max(0.0, sum) * inverse_weight, optimum};
+    }
+    double best = q.sum(pa);
+    Vec3 position = pa;
+    if (const double sum_b = q.sum(pb); sum_b < best) best = sum_b, position = pb;
+    if (const double sum_mid = q.sum(midpoint); sum_mid < best) best = sum_mid, position = midpoint;
+    return {std::max(0.0, best) * inverse_weight, position};
   }
 
-  HeapEntry entry(std::uint32_t keep, std::uint32_t remove) const {
-    return {CollapseHeap::key(placement(keep, remove).error, keep), remove, version_[keep], version_[remove]};
-  }
-
-  // A heap of every edge of the current mesh.
-  void build_heap() {
-    heap_.clear();
+  // One pass: rates every edge, then collapses in order of rate. Returns the collapses made.
+  std::size_t run_pass(int level, bool limited) {
+    build_incidence();
+    candidates_.clear();
     for (std::uint32_t u = 0; u < position_.size(); ++u) {
-      if (!vertex_alive_[u]) continue;
-      next_stamp();
+      if (ref_start_[u] == ref_start_[u + 1]) continue;
+      const std::uint32_t stamp = next_stamp();
       for_each_triangle(u, [&](std::uint32_t t) {
         for (const std::uint32_t w : triangles_[t])
-          if (w > u && mark_[w] != stamp_) {
-            mark_[w] = stamp_;
-            heap_.append(entry(u, w));
+          if (w > u && mark_[w] != stamp) {
+            mark_[w] = stamp;
+            candidates_.push_back({error_bits(placement(u, w).error), u, w});
           }
       });
     }
-    heap_.heapify();
+    sort_candidates(candidates_, scratch_);
+
+    // Goal: half of the triangles over budget, about two per collapse.
+    const std::size_t goal = std::max<std::size_t>(1, (alive_triangles_ - max_triangles_ + 1) / 2);
+    double error_limit = std::numeric_limits<double>::infinity();
+    if (limited) {
+      const std::size_t goal_collapse = std::min(candidates_.size() - 1, goal / 2);
+      error_limit = kPassErrorSlack * candidates_[goal_collapse].error();
+    }
+    // A collapse locks its neighbourhood, whose incidence lists are stale until the next pass.
+    ++pass_;
+    std::size_t removed = 0, collapses = 0;
+    for (const Candidate& candidate : candidates_) {
+      const std::uint32_t u = candidate.u, w = candidate.w;
+      if (lock_[u] == pass_ || lock_[w] == pass_) continue;
+      const std::size_t before = alive_triangles_;
+      if (!try_collapse(u, w, level, error_limit)) {
+        if (candidate.error() > error_limit) break;
+        continue;
+      }
+      removed += before - alive_triangles_;
+      ++collapses;
+      if (alive_triangles_ <= max_triangles_ || removed >= goal) break;
+    }
+    return collapses;
   }
 
   // A fresh value for mark_, which no vertex holds yet.
@@ -435,14 +390,11 @@ class QuadricSimplifier {
     return ++stamp_;
   }
 
-  bool stale(const HeapEntry& entry) const {
-    return version_[entry.keep()] != entry.keep_version || version_[entry.remove] != entry.remove_version;
-  }
-
   static int corner_of(const Triangle& t, std::uint32_t v) { return t[0] == v ? 0 : t[1] == v ? 1 : t[2] == v ? 2 : -1; }
 
-  // Collapses edge (keep, remove) into keep if the rules of `level` allow it.
-  void try_collapse(std::uint32_t keep, std::uint32_t remove, int level) {
+  // Collapses edge (keep, remove) into keep if the rules of `level` allow it and its error
+  // is within the limit; then locks every vertex around it for the rest of the pass.
+  bool try_collapse(std::uint32_t keep, std::uint32_t remove, int level, double error_limit) {
     keep_triangles_.clear();
     remove_triangles_.clear();
     for_each_triangle(keep, [&](std::uint32_t t) { keep_triangles_.push_back(t); });
@@ -451,14 +403,13 @@ class QuadricSimplifier {
       remove_triangles_.push_back(t);
       if (corner_of(triangles_[t], keep) >= 0) ++shared;
     });
-    if (shared == 0) return;  // not an edge any more
-    if (alive_triangles_ == shared) return;  // would leave nothing
-    if (level < 2 && !keeps_topology(keep, remove, shared)) return;
-
+    if (alive_triangles_ == shared) return false;  // would leave nothing
+    if (level < 2 && !keeps_topology(keep, remove, shared)) return false;
     const Placement target = placement(keep, remove);
-    if (level < 1 && flips(keep, remove, target.position)) return;
+    if (!(target.error <= error_limit)) return false;
+    if (level < 1 && flips(keep, remove, target.position)) return false;
 
-    if (refs_.size() + keep_triangles_.size() + remove_triangles_.size() > compact_at_) compact_refs();
+    lock_[keep] = lock_[remove] = pass_;
     for (const std::uint32_t t : remove_triangles_) {
       Triangle& tri = triangles_[t];
       if (corner_of(tri, keep) >= 0) {
@@ -468,33 +419,13 @@ class QuadricSimplifier {
         tri[corner_of(tri, remove)] = keep;
       }
     }
-    const auto start = static_cast<std::uint32_t>(refs_.size());
-    for (const std::uint32_t t : keep_triangles_)
-      if (triangles_[t][0] != kDeadTriangle) refs_.push_back(t);
-    for (const std::uint32_t t : remove_triangles_)
-      if (triangles_[t][0] != kDeadTriangle) refs_.push_back(t);
-    ref_start_[keep] = start;
-    ref_count_[keep] = static_cast<std::uint32_t>(refs_.size()) - start;
-    ref_count_[remove] = 0;
-
     quadric_[keep] += quadric_[remove];
     position_[keep] = target.position;
     moved_[keep] = 1;
     border_[keep] = border_[keep] | border_[remove];
-    vertex_alive_[remove] = 0;
-    ++version_[keep];
-    ++version_[remove];
     max_error_ = std::max(max_error_, target.error);
     ++collapses_;
-
-    next_stamp();
-    for_each_triangle(keep, [&](std::uint32_t t) {
-      for (const std::uint32_t w : triangles_[t])
-        if (w != keep && mark_[w] != stamp_) {
-          mark_[w] = stamp_;
-          heap_.push(entry(keep, w));
-        }
-    });
+    return true;
   }
 
   // Link condition (the vertices adjacent to both ends are exactly the corners opposite the
@@ -548,13 +479,6 @@ class QuadricSimplifier {
     return false;
   }
 
-  void compact_refs() {
-    build_incidence();
-    // Leave room for the next collapses without compacting again soon.
-    compact_at_ = std::max(compact_at_, 3 * refs_.size() + 1024);
-    refs_.reserve(compact_at_);
-  }
-
   // Last resort: keep the max_triangles_ largest triangles.
   void drop_smallest_triangles() {
     std::vector<std::pair<double, std::uint32_t>> by_area;
@@ -576,28 +500,27 @@ class QuadricSimplifier {
     return position_[v] * (diagonal_ > 0 ? diagonal_ : 1.0) + center_;
   }
 
-  // Surviving triangles without exactly collinear ones or same-order duplicates, over the
-  // vertices they use, numbered in order of first use.
+  // Surviving triangles without exactly collinear ones or repeats (the same three vertices
+  // in any order; the first is kept), over the vertices they use, numbered in order of use.
   TriangleMesh output_mesh() const {
     std::vector<Vertex> world(position_.size());
-    for (std::uint32_t v = 0; v < position_.size(); ++v)
-      if (vertex_alive_[v]) world[v] = world_position(v);
-    std::vector<Triangle> kept;
+    for (std::uint32_t v = 0; v < position_.size(); ++v) world[v] = world_position(v);
+    std::vector<Triangle> kept, corners;
     for (const Triangle& tri : triangles_) {
       if (tri[0] == kDeadTriangle) continue;
       if (exactly_collinear(world[tri[0]], world[tri[1]], world[tri[2]])) continue;
-      // Rotate so the smallest index comes first: equal triangles become equal arrays.
-      const int first = tri[0] < tri[1] ? (tri[0] < tri[2] ? 0 : 2) : (tri[1] < tri[2] ? 1 : 2);
-      kept.push_back({tri[first], tri[(first + 1) % 3], tri[(first + 2) % 3]});
+      kept.push_back(tri);
+      corners.push_back(tri);
+      std::sort(corners.back().begin(), corners.back().end());
     }
     std::vector<std::uint32_t> order(kept.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&kept](std::uint32_t a, std::uint32_t b) {
-      return kept[a] != kept[b] ? kept[a] < kept[b] : a < b;
+    std::sort(order.begin(), order.end(), [&corners](std::uint32_t a, std::uint32_t b) {
+      return corners[a] != corners[b] ? corners[a] < corners[b] : a < b;
     });
     std::vector<std::uint8_t> duplicate(kept.size(), 0);
     for (std::size_t i = 1; i < order.size(); ++i)
-      if (kept[order[i]] == kept[order[i - 1]]) duplicate[order[i]] = 1;
+      if (corners[order[i]] == corners[order[i - 1]]) duplicate[order[i]] = 1;
 
     TriangleMesh mesh;
     std::vector<std::uint32_t> output_index(position_.size(), kDeadTriangle);
@@ -626,18 +549,16 @@ class QuadricSimplifier {
   std::vector<Vec3> position_;  // in the normalised frame
   std::vector<Quadric> quadric_;
   std::vector<VertexIndex> origin_;  // input vertex it started as
-  std::vector<std::uint8_t> moved_, vertex_alive_, border_;
-  std::vector<std::uint16_t> version_;
-  std::vector<std::uint32_t> mark_;
-  std::vector<std::uint32_t> ref_start_, ref_count_;
+  std::vector<std::uint8_t> moved_, border_;
+  std::vector<std::uint32_t> mark_, lock_;
+  std::vector<std::uint32_t> ref_start_;  // #V + 1 offsets into refs_
   std::uint32_t stamp_ = 0;
 
   std::vector<Triangle> triangles_;  // [0] == kDeadTriangle once collapsed
   std::size_t alive_triangles_ = 0;
   std::vector<std::uint32_t> refs_;
-  std::size_t compact_at_ = 0;
-
-  CollapseHeap heap_;
+  std::uint32_t pass_ = 0;
+  std::vector<Candidate> candidates_, scratch_;  // of the current pass
   std::vector<std::uint32_t> keep_triangles_, remove_triangles_;
   double max_error_ = 0;
   std::size_t collapses_ = 0;
