@@ -1,0 +1,39 @@
+#pragma once
+// How far apart two triangle surfaces are: a sampled two-sided Hausdorff distance, the
+// error measure of the general proxies.
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+struct SurfaceDistanceOptions {
+  std::size_t samples_per_mesh = 20000;  ///< area-uniform random points on each mesh
+  std::uint64_t seed = 1;
+};
+
+struct SurfaceDistance {
+  double a_to_b_world = 0;  ///< largest distance from a sample of a to the surface of b
+  double b_to_a_world = 0;  ///< largest distance from a sample of b to the surface of a
+  double hausdorff_world() const { return std::max(a_to_b_world, b_to_a_world); }
+};
+
+/// Sampled two-sided Hausdorff distance between the surfaces of `a` and `b`, in world units.
+/// The samples of each mesh are every vertex its triangles use plus
+/// `options.samples_per_mesh` points drawn uniformly by area from `options.seed`; each is
+/// measured to the exact closest point of the other mesh (CGAL AABB tree over its
+/// triangles). The result is a lower bound of the true Hausdorff distance that converges to
+/// it as samples grow; it is exact whenever the farthest point is a vertex (for instance
+/// between two polyhedra whose farthest points are corners). Deterministic for a seed.
+///
+/// Triangles with collinear corners have no area and are neither sampled nor measured to;
+/// their vertices are still samples. Throws InvalidInputError (empty file name) if a mesh
+/// has no triangle of non-zero area, an index is out of range or a used coordinate is not
+/// finite.
+SurfaceDistance sampled_hausdorff_distance(const TriangleMesh& a, const TriangleMesh& b,
+                                           const SurfaceDistanceOptions& options = {});
+
+}  // namespace visproxy
