@@ -1,0 +1,62 @@
+#pragma once
+// A convex polytope with few faces that provably contains a mesh: the exact convex hull
+// simplified by removing half-spaces, never by moving a face inward.
+
+#include <cstddef>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+struct BoundedHullOptions {
+  /// Most planar faces the result may have; at least 4.
+  std::size_t max_faces = 32;
+};
+
+struct BoundedHullResult {
+  /// Outward-oriented, closed, manifold triangles; each planar face is fanned from one corner.
+  TriangleMesh mesh;
+  /// Planar faces of the result (<= max_faces).
+  std::size_t faces = 0;
+  /// Enclosed volume of `mesh` (mesh units cubed).
+  double volume = 0.0;
+  /// Volume of the exact convex hull of the input (ConvexHullResult::volume).
+  double exact_hull_volume = 0.0;
+  /// (volume - exact_hull_volume) / exact_hull_volume: the volume added to the exact hull,
+  /// relative to it; 0 when the exact hull is flat (both volumes are 0 then).
+  double added_volume_fraction() const {
+    return exact_hull_volume > 0.0 ? (volume - exact_hull_volume) / exact_hull_volume : 0.0;
+  }
+};
+
+/// A convex polytope with at most `options.max_faces` planar faces that contains every
+/// vertex the triangles of `mesh` reference, with as little added volume as the greedy
+/// method finds.
+///
+/// Method: start from the planes of the exact convex hull's facets (build_convex_hull,
+/// coplanar facets merged) and repeatedly remove the plane whose removal adds the least
+/// volume; a removal that would leave an unbounded region is never taken. Removing a
+/// half-space only grows the polytope, so it contains the hull. The kept planes are then
+/// moved out to touch the hull vertices, the polytope's corners are computed in double,
+/// and containment is checked with exact predicates on the output triangles: every
+/// input vertex is on the inner side of, or on, the plane of every output triangle. Where
+/// rounding left a vertex outside, the offending planes are moved outward by a small
+/// amount relative to the bounding-box diagonal and the check is repeated until it passes,
+/// so the returned mesh always contains every input vertex, exactly.
+///
+/// Returns the exact hull itself when it already has at most max_faces faces.
+/// A flat input (all vertices coplanar) is returned as its exact flat hull (see
+/// build_convex_hull: two sides, faces = 2, volume = 0) when its polygon has at most
+/// max_faces edges.
+///
+/// Throws InvalidInputError when the input has no hull (build_convex_hull), when
+/// max_faces < 4, when a flat input's polygon has more than max_faces edges (a simpler
+/// polygon's new corners could not be kept in the input's plane exactly), and when no
+/// plane can be removed without leaving an unbounded region before max_faces is reached
+/// (this happens only below 7 faces, e.g. a box asked for 5).
+///
+/// O(H log H) for H hull facets, plus O(V_hull * max_faces) for the containment check.
+/// Deterministic.
+BoundedHullResult build_bounded_hull(const TriangleMesh& mesh, const BoundedHullOptions& options = {});
+
+}  // namespace visproxy
