@@ -51,7 +51,9 @@ constexpr double kMinRelativeDeterminant = 1e-3;
 constexpr double kMinNormalCosine = 0.0;
 // A pass stops at collapses whose error exceeds this many times that of its goal collapse.
 constexpr double kPassErrorSlack = 1.5;
+// Marks a dead triangle (in its first corner) and a vertex not numbered yet.
 constexpr std::uint32_t kDeadTriangle = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kUnnumbered = std::numeric_limits<std::uint32_t>::max();
 
 // Symmetric 4x4 quadric [A b; b^T c] in its 10 distinct entries, with the area it stands for.
 struct Quadric {
@@ -218,7 +220,7 @@ class QuadricSimplifier {
     for (std::size_t v = 0; v < vertex_count; ++v)
       if (used[v]) by_code.emplace_back(morton_code((p[v] - center_) * scale), static_cast<VertexIndex>(v));
     std::sort(by_code.begin(), by_code.end());
-    std::vector<std::uint32_t> working(vertex_count, kDeadTriangle);
+    std::vector<std::uint32_t> working(vertex_count, kUnnumbered);
     for (std::size_t i = 0; i < by_code.size(); ++i) {
       const VertexIndex v = by_code[i].second;
       for (std::size_t j = i; j-- > 0 && by_code[j].first == by_code[i].first;)
@@ -226,7 +228,7 @@ class QuadricSimplifier {
           working[v] = working[by_code[j].second];
           break;
         }
-      if (working[v] != kDeadTriangle) continue;
+      if (working[v] != kUnnumbered) continue;
       working[v] = static_cast<std::uint32_t>(origin_.size());
       origin_.push_back(v);
       position_.push_back((p[v] - center_) * scale);
@@ -283,7 +285,7 @@ class QuadricSimplifier {
       for (const std::uint32_t v : tri) quadric_[v] += q;
     }
     // Border edges: edges (u, w) that exactly one triangle has; each is seen from its lower end.
-    std::vector<std::uint32_t> count(position_.size(), 0), counted_for(position_.size(), kDeadTriangle);
+    std::vector<std::uint32_t> count(position_.size(), 0), counted_for(position_.size(), kUnnumbered);
     for (std::uint32_t u = 0; u < position_.size(); ++u) {
       for_each_triangle(u, [&](std::uint32_t t) {
         for (const std::uint32_t w : triangles_[t]) {
@@ -559,13 +561,13 @@ class QuadricSimplifier {
       if (corners[order[i]] == corners[order[i - 1]]) duplicate[order[i]] = 1;
 
     TriangleMesh mesh;
-    std::vector<std::uint32_t> output_index(position_.size(), kDeadTriangle);
+    std::vector<std::uint32_t> output_index(position_.size(), kUnnumbered);
     for (std::size_t t = 0; t < kept.size(); ++t) {
       if (duplicate[t]) continue;
       Triangle out;
       for (int c = 0; c < 3; ++c) {
         const std::uint32_t v = kept[t][c];
-        if (output_index[v] == kDeadTriangle) {
+        if (output_index[v] == kUnnumbered) {
           output_index[v] = static_cast<std::uint32_t>(mesh.positions.size());
           mesh.positions.push_back(world[v]);
         }
