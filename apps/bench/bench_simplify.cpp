@@ -275,7 +275,7 @@ int main(int argc, char** argv) {
       const fs::path bunny = fs::path(VISPROXY_MESH_DIR) / "bunny00.off";
       if (!fs::is_regular_file(bunny)) die("no mesh file " + bunny.string() + " (build the 'cgal_meshes' target)");
       inputs.emplace_back("bunny00.off", visproxy::read_mesh(bunny));
-      inputs.emplace_back("bunny00.off x4^2", visproxy::subdivide_midpoint(inputs.front().second, 2));
+      inputs.emplace_back("bunny00.off subdiv. x2", visproxy::subdivide_midpoint(inputs.front().second, 2));
     }
     for (const fs::path& path : paths) inputs.emplace_back(path.filename().string(), visproxy::read_mesh(path));
   } catch (const visproxy::Error& error) {

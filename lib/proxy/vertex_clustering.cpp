@@ -5,7 +5,8 @@
 // that keep three distinct corners survive.
 // P. Lindstrom. Out-of-core simplification of large polygonal models. SIGGRAPH 2000: the
 // representative of a cell minimises the summed plane quadric of the triangles touching it,
-// solved with a pseudo-inverse so that flat and ridge-like cells stay well defined.
+// solved with a pseudo-inverse about the cell's area-weighted mean, so that flat and
+// ridge-like cells stay well defined.
 
 #include "proxy/vertex_clustering.h"
 
@@ -29,18 +30,26 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
-using CellKey = std::array<std::int64_t, 3>;
+// Cell coordinates packed 21 bits per axis, x highest: sorting the keys sorts the cells.
+using CellKey = std::uint64_t;
+constexpr int kBitsPerAxis = 21;
 
 // Eigenvalues of a cell's quadric below this fraction of the largest are treated as zero.
 constexpr double kRelativeEigenvalueCutoff = 1e-3;
-constexpr double kMaxCellsPerAxis = 1u << 30;
+constexpr double kMaxCellsPerAxis = (1u << kBitsPerAxis) - 1;
 
 struct Cluster {
-  CellKey cell{};
+  CellKey cell = 0;
   Mat3 a = Mat3::Zero();  // sum of w n n^T
   Vec3 b = Vec3::Zero();  // sum of w d n
   Vec3 sum = Vec3::Zero();  // of the local positions of its vertices
   double count = 0;
+  Vec3 area_weighted_sum = Vec3::Zero();  // of its triangle corners, weighted by area
+  double area = 0;
+
+  // Area-weighted mean of its corners (the same for a soup as for the welded mesh), or the
+  // plain mean of its vertices when they touch no triangle of non-zero area.
+  Vec3 mean() const { return area > 0 ? Vec3(area_weighted_sum / area) : Vec3(sum / count); }
 };
 
 bool exactly_collinear(const Vertex& a, const Vertex& b, const Vertex& c) {
@@ -91,28 +100,26 @@ VertexClusteringResult cluster_vertices(const TriangleMesh& mesh, const VertexCl
   if (!(largest_extent > 0)) return result;  // every triangle is a point
   if (!(largest_extent / result.cell_size_world <= kMaxCellsPerAxis))
     throw InvalidInputError("", "the clustering cell size " + std::to_string(options.cell_size_relative) +
-                                    " makes more than 2^30 cells along an axis");
+                                    " makes more than 2^21 - 1 cells along an axis");
   const double cell = result.cell_size_world;
 
   // Cell of every used vertex; clusters numbered in cell order.
-  std::vector<CellKey> key_of(vertex_count);
-  std::vector<VertexIndex> used_vertices;
+  std::vector<std::pair<CellKey, VertexIndex>> used_vertices;
   for (std::size_t v = 0; v < vertex_count; ++v) {
     if (!used[v]) continue;
-    used_vertices.push_back(static_cast<VertexIndex>(v));
     const Vec3 scaled = (mesh.positions[v] - box.min) / cell;
-    key_of[v] = {static_cast<std::int64_t>(std::floor(scaled.x())), static_cast<std::int64_t>(std::floor(scaled.y())),
-                 static_cast<std::int64_t>(std::floor(scaled.z()))};
+    CellKey key = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      key = (key << kBitsPerAxis) | static_cast<CellKey>(std::floor(scaled[axis]));
+    used_vertices.emplace_back(key, static_cast<VertexIndex>(v));
   }
-  std::sort(used_vertices.begin(), used_vertices.end(), [&key_of](VertexIndex a, VertexIndex b) {
-    return key_of[a] != key_of[b] ? key_of[a] < key_of[b] : a < b;
-  });
+  std::sort(used_vertices.begin(), used_vertices.end());
   std::vector<std::uint32_t> cluster_of(vertex_count, 0);
   std::vector<Cluster> clusters;
   // Quadrics and means in a frame at the box's minimum, scaled by the largest extent.
   const double scale = 1 / largest_extent;
-  for (const VertexIndex v : used_vertices) {
-    if (clusters.empty() || clusters.back().cell != key_of[v]) clusters.push_back(Cluster{key_of[v]});
+  for (const auto& [key, v] : used_vertices) {
+    if (clusters.empty() || clusters.back().cell != key) clusters.push_back(Cluster{key});
     cluster_of[v] = static_cast<std::uint32_t>(clusters.size() - 1);
     clusters.back().sum += (mesh.positions[v] - box.min) * scale;
     clusters.back().count += 1;
@@ -129,6 +136,12 @@ VertexClusteringResult cluster_vertices(const TriangleMesh& mesh, const VertexCl
     const Mat3 a = weight * n * n.transpose();
     const Vec3 b = weight * d * n;
     const std::uint32_t c0 = cluster_of[triangle[0]], c1 = cluster_of[triangle[1]], c2 = cluster_of[triangle[2]];
+    const Vec3* corners[3] = {&p0, &p1, &p2};
+    for (int c = 0; c < 3; ++c) {
+      Cluster& cluster = clusters[cluster_of[triangle[c]]];
+      cluster.area_weighted_sum += weight * *corners[c];
+      cluster.area += weight;
+    }
     clusters[c0].a += a;
     clusters[c0].b += b;
     if (c1 != c0) {
@@ -145,16 +158,17 @@ VertexClusteringResult cluster_vertices(const TriangleMesh& mesh, const VertexCl
   std::vector<Vertex> representative(clusters.size());
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const Cluster& cluster = clusters[c];
-    const Vec3 local = quadric_minimiser(cluster, cluster.sum / cluster.count);
+    const Vec3 local = quadric_minimiser(cluster, cluster.mean());
     Vertex world = box.min + local * largest_extent;
     for (int axis = 0; axis < 3; ++axis) {
-      const double low = box.min[axis] + static_cast<double>(cluster.cell[axis]) * cell;
-      const double high = box.min[axis] + static_cast<double>(cluster.cell[axis] + 1) * cell;
+      const CellKey index = (cluster.cell >> (kBitsPerAxis * (2 - axis))) & ((CellKey{1} << kBitsPerAxis) - 1);
+      const double low = box.min[axis] + static_cast<double>(index) * cell;
+      const double high = box.min[axis] + static_cast<double>(index + 1) * cell;
       world[axis] = std::clamp(world[axis], low, high);
     }
     representative[c] = world;
   }
-  for (const VertexIndex v : used_vertices)
+  for (const auto& [key, v] : used_vertices)
     result.max_vertex_displacement_world =
         std::max(result.max_vertex_displacement_world, (mesh.positions[v] - representative[cluster_of[v]]).norm());
 

@@ -22,7 +22,8 @@ struct VertexClusteringResult {
 /// (Rossignac & Borrel 1993) and keeps the triangles whose corners land in three cells.
 /// The grid is anchored at the bounding box's minimum corner. A cell's representative
 /// minimises the quadric of the triangles touching the cell (Lindstrom 2000; directions in
-/// which that quadric is nearly flat are taken from the mean of the cell's vertices), then is
+/// which that quadric is nearly flat are taken from the area-weighted mean of the cell's
+/// triangle corners, so duplicated vertices do not pull it), then is
 /// clamped into the cell.
 ///
 /// Guarantees, for any input with at least one triangle:
@@ -36,7 +37,7 @@ struct VertexClusteringResult {
 /// thin parts thinner than a cell collapse into sheets, and parts smaller than a cell vanish.
 ///
 /// Throws InvalidInputError (empty file name) if the cell size is not finite and > 0, would
-/// make more than 2^30 cells along an axis, or the mesh has no triangle, an index out of range
+/// make more than 2^21 - 1 cells along an axis (below about 5e-7), or the mesh has no triangle, an index out of range
 /// or a non-finite used coordinate. A mesh whose used vertices are all one point gives an
 /// empty result.
 VertexClusteringResult cluster_vertices(const TriangleMesh& mesh, const VertexClusteringOptions& options);

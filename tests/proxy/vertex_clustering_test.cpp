@@ -76,6 +76,12 @@ TEST(VertexClustering, IsDeterministic) {
   EXPECT_EQ(first.max_vertex_displacement_world, second.max_vertex_displacement_world);
 }
 
+// Clusters are made of positions, so a soup with duplicated vertices gives the same result.
+TEST(VertexClustering, SoupClustersLikeTheWeldedMesh) {
+  const TriangleMesh input = read_mesh(testing::cgal_mesh("knot1.off"));
+  EXPECT_EQ(cluster_vertices(testing::unwelded(input), {}).mesh, cluster_vertices(input, {}).mesh);
+}
+
 TEST(VertexClustering, SingleTriangleSurvivesSmallCells) {
   const TriangleMesh triangle = testing::single_triangle();
   const VertexClusteringResult result = cluster_vertices(triangle, {.cell_size_relative = 0.1});
