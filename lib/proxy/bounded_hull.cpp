@@ -28,7 +28,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <map>
 #include <optional>
 #include <queue>
 #include <stdexcept>
@@ -269,22 +268,13 @@ double cap_volume(const DualHull& hull, PlaneIndex v, const std::vector<DualTria
 // std::logic_error when the origin is not strictly inside (the planes bound no region
 // around it): the callers only pass plane sets that are known to be bounded.
 std::vector<DualTriangle> dual_hull_triangles(const std::vector<Vertex>& duals) {
-  std::map<std::array<double, 3>, PlaneIndex> plane_of_point;
-  for (std::size_t j = 0; j < duals.size(); ++j)
-    plane_of_point.emplace(std::array<double, 3>{duals[j].x(), duals[j].y(), duals[j].z()}, static_cast<PlaneIndex>(j));
-  const TriangleMesh hull = hull_detail::exact_convex_hull(duals);
-  std::vector<PlaneIndex> plane_of_corner;
-  plane_of_corner.reserve(hull.positions.size());
-  for (const Vertex& p : hull.positions) plane_of_corner.push_back(plane_of_point.at({p.x(), p.y(), p.z()}));
-
   const Point origin(0.0, 0.0, 0.0);
   std::vector<DualTriangle> triangles;
-  triangles.reserve(hull.triangles.size());
-  for (const Triangle& t : hull.triangles) {
-    if (CGAL::orientation(cgal_point(hull.positions[t[0]]), cgal_point(hull.positions[t[1]]),
-                          cgal_point(hull.positions[t[2]]), origin) != CGAL::NEGATIVE)
+  for (const Triangle& t : hull_detail::exact_convex_hull(duals)) {
+    if (CGAL::orientation(cgal_point(duals[t[0]]), cgal_point(duals[t[1]]), cgal_point(duals[t[2]]), origin) !=
+        CGAL::NEGATIVE)
       throw std::logic_error("bounded hull: the planes do not enclose the centre strictly");
-    triangles.push_back({plane_of_corner[t[0]], plane_of_corner[t[1]], plane_of_corner[t[2]]});
+    triangles.push_back({t[0], t[1], t[2]});
   }
   return triangles;
 }
@@ -425,31 +415,31 @@ Vertex volume_centroid(const TriangleMesh& mesh) {
   return origin + weighted / (4.0 * six_volume);
 }
 
-// One plane per planar facet of the exact hull, in coordinates centred at `center`.
+// One plane per planar facet of the exact hull, in coordinates centred at `center`. The
+// normal comes from the facet's triangles in input coordinates (exact for axis-aligned
+// facets with small integer coordinates), the offset from its corners.
 std::vector<Plane> facet_planes(const ConvexHullResult& hull, const Vertex& center) {
   std::size_t facet_count = 0;
   const std::vector<std::uint32_t> facet_of_triangle = hull_detail::planar_facets(hull.mesh, facet_count);
   std::vector<Vertex> area_normal(facet_count, Vertex::Zero());
   for (std::size_t t = 0; t < hull.mesh.triangles.size(); ++t) {
     const Triangle& triangle = hull.mesh.triangles[t];
-    const Vertex a = hull.mesh.positions[triangle[0]] - center;
-    const Vertex b = hull.mesh.positions[triangle[1]] - center;
-    const Vertex c = hull.mesh.positions[triangle[2]] - center;
-    area_normal[facet_of_triangle[t]] += (b - a).cross(c - a);
+    const Vertex& a = hull.mesh.positions[triangle[0]];
+    area_normal[facet_of_triangle[t]] += (hull.mesh.positions[triangle[1]] - a).cross(hull.mesh.positions[triangle[2]] - a);
   }
   std::vector<Plane> planes(facet_count);
-  for (std::size_t f = 0; f < facet_count; ++f) {
-    planes[f].normal = area_normal[f].normalized();
-    planes[f].offset = -std::numeric_limits<double>::infinity();
-  }
+  for (std::size_t f = 0; f < facet_count; ++f) planes[f].normal = area_normal[f].normalized();
+  std::vector<double> support(facet_count, -std::numeric_limits<double>::infinity());
   for (std::size_t t = 0; t < hull.mesh.triangles.size(); ++t)
     for (const VertexIndex corner : hull.mesh.triangles[t]) {
-      Plane& plane = planes[facet_of_triangle[t]];
-      plane.offset = std::max(plane.offset, plane.normal.dot(hull.mesh.positions[corner] - center));
+      const std::uint32_t f = facet_of_triangle[t];
+      support[f] = std::max(support[f], planes[f].normal.dot(hull.mesh.positions[corner]));
     }
-  for (const Plane& plane : planes)
-    if (!plane.normal.allFinite() || !(plane.offset > 0.0))
+  for (std::size_t f = 0; f < facet_count; ++f) {
+    planes[f].offset = support[f] - planes[f].normal.dot(center);
+    if (!planes[f].normal.allFinite() || !(planes[f].offset > 0.0))
       reject("the convex hull is too thin for its facet planes to be computed in double precision");
+  }
   return planes;
 }
 
@@ -492,15 +482,19 @@ BoundedHullResult build_bounded_hull(const TriangleMesh& mesh, const BoundedHull
   for (PlaneIndex j = 0; j < dual_hull.vertex_count(); ++j)
     if (dual_hull.alive(j)) kept.push_back(planes[j]);
   for (Plane& plane : kept) {
-    plane.offset = -std::numeric_limits<double>::infinity();
-    for (const Vertex& p : exact.mesh.positions) plane.offset = std::max(plane.offset, plane.normal.dot(p - center));
+    double support = -std::numeric_limits<double>::infinity();
+    for (const Vertex& p : exact.mesh.positions) support = std::max(support, plane.normal.dot(p));
+    plane.offset = support - plane.normal.dot(center);
   }
 
   // Build, check exactly, push the planes that leave a vertex outside, repeat.
   std::vector<Point> hull_points;
   hull_points.reserve(exact.mesh.positions.size());
   for (const Vertex& p : exact.mesh.positions) hull_points.push_back(cgal_point(p));
-  double push = 1e-12 * bounding_box(exact.mesh).diagonal();
+  // A few units in the last place of the coordinates, doubled each round.
+  const BoundingBox box = bounding_box(exact.mesh);
+  double push = 8.0 * std::numeric_limits<double>::epsilon() *
+                (box.diagonal() + std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()));
   for (int round = 0;; ++round) {
     Polytope polytope = polytope_of_planes(kept, center);
     const std::vector<PlaneIndex> outside = planes_leaving_points_outside(polytope, hull_points);

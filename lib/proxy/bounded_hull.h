@@ -53,7 +53,8 @@ struct BoundedHullResult {
 /// max_faces < 4, when a flat input's polygon has more than max_faces edges (a simpler
 /// polygon's new corners could not be kept in the input's plane exactly), and when no
 /// plane can be removed without leaving an unbounded region before max_faces is reached
-/// (this happens only below 7 faces, e.g. a box asked for 5).
+/// (by Steinitz's theorem some plane of 7 or more is always removable, so this happens
+/// for max_faces 4 or 5 only, e.g. a box asked for 5 faces).
 ///
 /// O(H log H) for H hull facets, plus O(V_hull * max_faces) for the containment check.
 /// Deterministic.

@@ -115,7 +115,20 @@ ConvexHullResult build_convex_hull(const TriangleMesh& mesh) {
     return result;
   }
 
-  result.mesh = hull_detail::exact_convex_hull(points);
+  const std::vector<Triangle> triangles = hull_detail::exact_convex_hull(points);
+  // Only the corners, in input order.
+  constexpr VertexIndex unused = ~VertexIndex{0};
+  std::vector<VertexIndex> output_index(points.size(), unused);
+  for (const Triangle& triangle : triangles)
+    for (const VertexIndex v : triangle) output_index[v] = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (output_index[i] != unused) {
+      output_index[i] = static_cast<VertexIndex>(result.mesh.positions.size());
+      result.mesh.positions.push_back(points[i]);
+    }
+  result.mesh.triangles.reserve(triangles.size());
+  for (const Triangle& t : triangles)
+    result.mesh.triangles.push_back({output_index[t[0]], output_index[t[1]], output_index[t[2]]});
   result.volume = hull_detail::enclosed_volume(result.mesh);
   hull_detail::planar_facets(result.mesh, result.faces);
   return result;

@@ -5,6 +5,9 @@
 #include <CGAL/convex_hull_3.h>
 
 #include <algorithm>
+#include <cassert>
+#include <functional>
+#include <unordered_map>
 #include <array>
 #include <numeric>
 #include <tuple>
@@ -26,31 +29,90 @@ std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
 
 }  // namespace
 
-TriangleMesh exact_convex_hull(const std::vector<Vertex>& points) {
+std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
   std::vector<Kernel::Point_3> cgal_points;
   cgal_points.reserve(points.size());
   for (const Vertex& p : points) cgal_points.push_back(point(p));
   // The Surface_mesh overload picks CGAL's exact-predicate hull traits (the indexed
-  // triangle set overload of CGAL 5.5 falls back to the kernel's inexact planes).
+  // triangle set overload of CGAL 5.5 falls back to the kernel's rounded planes).
   CGAL::Surface_mesh<Kernel::Point_3> hull;
   CGAL::convex_hull_3(cgal_points.begin(), cgal_points.end(), hull);
+
+  // The hull over input indices. CGAL's vertex and face order depends on memory addresses.
+  // Looked up only, never iterated: the hash order does not reach the output.
+  struct CoordinatesHash {
+    std::size_t operator()(const std::array<double, 3>& c) const {
+      std::size_t h = 0;
+      for (const double x : c) h = h * 0x9E3779B97F4A7C15ull + std::hash<double>{}(x);
+      return h;
+    }
+  };
+  std::unordered_map<std::array<double, 3>, VertexIndex, CoordinatesHash> index_of_point;
+  index_of_point.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    index_of_point.emplace(std::array<double, 3>{points[i].x(), points[i].y(), points[i].z()}, static_cast<VertexIndex>(i));
   TriangleMesh mesh;
-  mesh.positions.reserve(hull.number_of_vertices());
+  mesh.positions = points;
+  std::vector<VertexIndex> input_index(hull.number_of_vertices());
   for (const auto vertex : hull.vertices()) {
     const Kernel::Point_3& p = hull.point(vertex);
-    mesh.positions.emplace_back(p.x(), p.y(), p.z());
+    input_index[vertex.idx()] = index_of_point.at({p.x(), p.y(), p.z()});
   }
-  mesh.triangles.reserve(hull.number_of_faces());
   for (const auto face : hull.faces()) {
     Triangle triangle{};
     int corner = 0;
     for (const auto vertex : CGAL::vertices_around_face(hull.halfedge(face), hull))
-      triangle[corner++] = static_cast<VertexIndex>(vertex.idx());
+      triangle[corner++] = input_index[vertex.idx()];
     mesh.triangles.push_back(triangle);
   }
   if (enclosed_volume(mesh) < 0.0)
     for (Triangle& triangle : mesh.triangles) std::swap(triangle[1], triangle[2]);
-  return mesh;
+
+  // Each planar facet's boundary, counter-clockwise seen from outside: the directed edges
+  // whose reverse lies in another facet.
+  std::size_t facet_count = 0;
+  const std::vector<std::uint32_t> facet_of_triangle = planar_facets(mesh, facet_count);
+  struct DirectedEdge {
+    VertexIndex from, to;
+    std::uint32_t facet;
+    bool operator<(const DirectedEdge& other) const { return std::tie(from, to) < std::tie(other.from, other.to); }
+  };
+  std::vector<DirectedEdge> edges;
+  edges.reserve(3 * mesh.triangles.size());
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      edges.push_back({mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3], facet_of_triangle[t]});
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::vector<std::pair<VertexIndex, VertexIndex>>> boundary(facet_count);
+  for (const DirectedEdge& edge : edges) {
+    const auto reverse = std::lower_bound(edges.begin(), edges.end(), DirectedEdge{edge.to, edge.from, 0});
+    assert(reverse != edges.end() && reverse->from == edge.to && reverse->to == edge.from);
+    if (reverse->facet != edge.facet) boundary[edge.facet].emplace_back(edge.from, edge.to);
+  }
+
+  std::vector<Triangle> triangles;
+  std::vector<VertexIndex> loop, corners;
+  for (auto& steps : boundary) {
+    std::sort(steps.begin(), steps.end());
+    loop.clear();
+    VertexIndex at = steps.front().first;
+    do {
+      loop.push_back(at);
+      at = std::lower_bound(steps.begin(), steps.end(), std::make_pair(at, VertexIndex{0}))->second;
+    } while (at != loop.front());
+    // Keep the corners: drop the points that lie on a straight stretch of the boundary.
+    corners.clear();
+    for (std::size_t k = 0; k < loop.size(); ++k) {
+      const VertexIndex before = loop[(k + loop.size() - 1) % loop.size()];
+      const VertexIndex after = loop[(k + 1) % loop.size()];
+      if (!CGAL::collinear(point(points[before]), point(points[loop[k]]), point(points[after])))
+        corners.push_back(loop[k]);
+    }
+    std::rotate(corners.begin(), std::min_element(corners.begin(), corners.end()), corners.end());
+    for (std::size_t k = 1; k + 1 < corners.size(); ++k) triangles.push_back({corners[0], corners[k], corners[k + 1]});
+  }
+  std::sort(triangles.begin(), triangles.end());
+  return triangles;
 }
 
 std::vector<std::uint32_t> planar_facets(const TriangleMesh& mesh, std::size_t& facet_count) {

@@ -11,10 +11,12 @@
 namespace visproxy::hull_detail {
 
 /// Convex hull of `points`, which must not all be coplanar, decided with exact
-/// predicates (CGAL's quickhull with its exact-predicate traits): its corners, each an
-/// input point bit for bit, and its triangles over them, outward-oriented. Points that
-/// are not corners (inside, or on a face or an edge) are left out, most of the time.
-TriangleMesh exact_convex_hull(const std::vector<Vertex>& points);
+/// predicates (CGAL's quickhull with its exact-predicate traits), in a canonical form that
+/// does not depend on the order in which CGAL works: outward triangles over indices into
+/// `points` (the lowest index among equal points); only the hull's corners are used
+/// (points inside, on a face or on an edge are left out); each planar facet is fanned
+/// from its lowest-index corner; the triangles are sorted.
+std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points);
 
 /// Planar facet of each triangle of a closed, manifold triangle mesh (#F entries, numbered
 /// 0.. in order of first appearance): two triangles that share an edge are in one facet

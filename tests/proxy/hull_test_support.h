@@ -5,6 +5,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <sstream>
 #include <vector>
 
@@ -33,17 +34,21 @@ inline std::vector<Vertex> referenced_vertices(const TriangleMesh& mesh) {
 inline ::testing::AssertionResult contains_every_vertex(const TriangleMesh& outside, const TriangleMesh& input) {
   using Point = ExactKernel::Point_3;
   const std::vector<Vertex> vertices = referenced_vertices(input);
+  BoundingBox box;
+  for (const Vertex& v : vertices) box.extend(v);
+  for (const Vertex& v : outside.positions) box.extend(v);
+  const double reach = box.diagonal();  // bounds |p - a| for every vertex p and corner a
   for (const Triangle& t : outside.triangles) {
     const Vertex& a = outside.positions[t[0]];
     const Vertex& b = outside.positions[t[1]];
     const Vertex& c = outside.positions[t[2]];
     const Vertex normal = (b - a).cross(c - a);
-    // A distance below -1e-9 * |normal| * |p - a| is far beyond rounding error.
-    const double clear_factor = 1e-9 * normal.norm();
+    // normal . (p - a) is computed with an error far below 1e-9 * |b - a| |c - a| |p - a|;
+    // below minus that, p is clearly inside and the exact predicate is not needed.
+    const double clearly_inside = -1e-9 * (b - a).norm() * (c - a).norm() * reach;
     const Point pa(a.x(), a.y(), a.z()), pb(b.x(), b.y(), b.z()), pc(c.x(), c.y(), c.z());
     for (const Vertex& v : vertices) {
-      const Vertex relative = v - a;
-      if (normal.dot(relative) < -clear_factor * relative.norm()) continue;
+      if (normal.dot(v - a) < clearly_inside) continue;
       const Point p(v.x(), v.y(), v.z());
       if (CGAL::orientation(pa, pb, pc, p) == CGAL::POSITIVE) {
         std::ostringstream message;
@@ -52,6 +57,26 @@ inline ::testing::AssertionResult contains_every_vertex(const TriangleMesh& outs
         return ::testing::AssertionFailure() << message.str();
       }
     }
+  }
+  return ::testing::AssertionSuccess();
+}
+
+/// Every vertex of `mesh` is at most `tolerance` outside the plane of every triangle of it
+/// whose plane is well defined: convex up to the rounding of its corners. Slivers (area
+/// below 1e-6 of the squared longest edge) are skipped: where more than three planes meet,
+/// rounding splits the corner into nearby ones joined by slivers whose planes mean nothing.
+inline ::testing::AssertionResult is_convex_within(const TriangleMesh& mesh, double tolerance) {
+  for (const Triangle& t : mesh.triangles) {
+    const Vertex& a = mesh.positions[t[0]];
+    const Vertex& b = mesh.positions[t[1]];
+    const Vertex& c = mesh.positions[t[2]];
+    const Vertex normal = (b - a).cross(c - a);
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    if (normal.norm() < 2e-6 * longest * longest) continue;
+    const Vertex unit = normal.normalized();
+    for (const Vertex& p : mesh.positions)
+      if (unit.dot(p - a) > tolerance)
+        return ::testing::AssertionFailure() << "a corner is " << unit.dot(p - a) << " outside a triangle's plane";
   }
   return ::testing::AssertionSuccess();
 }
