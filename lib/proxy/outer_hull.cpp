@@ -390,32 +390,44 @@ std::optional<Eigen::Vector3d> minimise_3d(const Eigen::Vector3d& objective, std
 
 // ---------------------------------------------------------------------------------------
 // A uniform grid over the current proxy triangles, for the self-intersection test.
-// Triangles are never removed from it: dead ones are skipped on query.
+// Triangles are never removed from it: dead ones are skipped on query. Boxes that span
+// more than kMaxCells cells go to a list that every query visits instead.
 
 class TriangleGrid {
  public:
   void reset(double cell_size) {
     cell_size_ = cell_size;
     cells_.clear();
+    large_.clear();
   }
 
   void insert(std::uint32_t triangle, const BoundingBox& box) {
-    const std::array<std::int64_t, 3> lo = cell_of(box.min);
-    const std::array<std::int64_t, 3> hi = cell_of(box.max);
-    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) cells_[key(x, y, z)].push_back(triangle);
+    const CellRange range = cells_of(box);
+    if (range.count() > kMaxCells) {
+      large_.push_back(triangle);
+      return;
+    }
+    for (std::int64_t z = range.lo[2]; z <= range.hi[2]; ++z)
+      for (std::int64_t y = range.lo[1]; y <= range.hi[1]; ++y)
+        for (std::int64_t x = range.lo[0]; x <= range.hi[0]; ++x) cells_[key(x, y, z)].push_back(triangle);
   }
 
-  /// Calls f(triangle) for every triangle inserted into a cell that `box` overlaps (with
-  /// repeats: the caller deduplicates).
+  /// Calls f(triangle) for every triangle that may overlap `box` (with repeats: the caller
+  /// deduplicates) until f returns false.
   template <typename F>
   void for_triangles_near(const BoundingBox& box, F f) const {
-    const std::array<std::int64_t, 3> lo = cell_of(box.min);
-    const std::array<std::int64_t, 3> hi = cell_of(box.max);
-    for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-      for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+    for (const std::uint32_t t : large_)
+      if (!f(t)) return;
+    const CellRange range = cells_of(box);
+    if (range.count() > kMaxCells) {
+      for (const auto& cell : cells_)
+        for (const std::uint32_t t : cell.second)
+          if (!f(t)) return;
+      return;
+    }
+    for (std::int64_t z = range.lo[2]; z <= range.hi[2]; ++z)
+      for (std::int64_t y = range.lo[1]; y <= range.hi[1]; ++y)
+        for (std::int64_t x = range.lo[0]; x <= range.hi[0]; ++x) {
           const auto it = cells_.find(key(x, y, z));
           if (it == cells_.end()) continue;
           for (const std::uint32_t t : it->second)
@@ -424,10 +436,29 @@ class TriangleGrid {
   }
 
  private:
-  std::array<std::int64_t, 3> cell_of(const Vertex& p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x() / cell_size_)),
-            static_cast<std::int64_t>(std::floor(p.y() / cell_size_)),
-            static_cast<std::int64_t>(std::floor(p.z() / cell_size_))};
+  static constexpr std::int64_t kMaxCells = 512;
+
+  struct CellRange {
+    std::array<std::int64_t, 3> lo;
+    std::array<std::int64_t, 3> hi;
+    std::int64_t count() const {
+      std::int64_t n = 1;
+      for (std::size_t k = 0; k < 3; ++k) n *= std::min<std::int64_t>(hi[k] - lo[k] + 1, kMaxCells + 1);
+      return n;
+    }
+  };
+
+  CellRange cells_of(const BoundingBox& box) const {
+    CellRange range{};
+    for (int k = 0; k < 3; ++k) {
+      // Clamped so that far-out coordinates cannot overflow; keys wrap around, which only
+      // adds candidates.
+      constexpr double limit = 0x1.0p40;
+      const auto k_index = static_cast<std::size_t>(k);
+      range.lo[k_index] = static_cast<std::int64_t>(std::clamp(std::floor(box.min[k] / cell_size_), -limit, limit));
+      range.hi[k_index] = static_cast<std::int64_t>(std::clamp(std::floor(box.max[k] / cell_size_), -limit, limit));
+    }
+    return range;
   }
   static std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
     constexpr std::uint64_t mask = (1u << 21) - 1;
@@ -437,6 +468,7 @@ class TriangleGrid {
 
   double cell_size_ = 1;
   std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells_;
+  std::vector<std::uint32_t> large_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -490,9 +522,12 @@ class OuterHullDecimator {
   std::size_t triangle_count() const { return alive_triangles_; }
 
   /// Collapses edges, least added volume first, until at most `max_triangles` remain or no
-  /// collapse passes the checks.
+  /// collapse passes the checks. A refused collapse is planned again when its neighbourhood
+  /// changes; a refusal caused by farther triangles is retried in the next round, up to
+  /// kMaxRounds rounds, while rounds still make progress.
   void collapse_edges(std::size_t max_triangles) {
-    for (std::size_t round = 0; alive_triangles_ > max_triangles; ++round) {
+    constexpr std::size_t kMaxRounds = 8;
+    for (std::size_t round = 0; round < kMaxRounds && alive_triangles_ > max_triangles; ++round) {
       push_all_edges();
       const std::size_t before = alive_triangles_;
       while (alive_triangles_ > max_triangles && !queue_.empty()) {
@@ -890,8 +925,8 @@ class OuterHullDecimator {
   std::size_t alive_triangles_;
   std::size_t triangles_at_grid_build_ = 0;
   TriangleGrid grid_;
-  std::vector<std::uint32_t> query_mark_;
-  std::uint32_t query_stamp_ = 0;
+  std::vector<std::uint64_t> query_mark_;
+  std::uint64_t query_stamp_ = 0;
   Random directions_;
   std::priority_queue<QueueEntry> queue_;
   // Scratch buffers of plan() and link_condition_holds(), kept to avoid reallocation.

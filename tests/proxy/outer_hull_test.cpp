@@ -42,9 +42,9 @@ double sampled_distance_to_input(const TriangleMesh& input, const TriangleMesh& 
   }
   using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<Kernel::Triangle_3>::const_iterator>;
   CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>> tree(triangles.begin(), triangles.end());
-  tree.accelerate_distance_queries();
+  if (!triangles.empty()) tree.accelerate_distance_queries();
   auto distance = [&](const Vertex& p) {
-    double squared = tree.squared_distance(point(p));
+    double squared = triangles.empty() ? std::numeric_limits<double>::infinity() : tree.squared_distance(point(p));
     for (const Kernel::Segment_3& s : segments)
       squared = std::min(squared, s.is_degenerate() ? CGAL::squared_distance(point(p), s.source())
                                                     : CGAL::squared_distance(point(p), s));
@@ -137,6 +137,17 @@ TEST(OuterHull, EnclosesTrianglesWithCollinearOrEqualCorners) {
   const OuterHullOptions options{.max_triangles = 32};
   const OuterHullResult hull = build_outer_hull(mesh, options);
   expect_valid_outer_hull(mesh, options, hull);
+}
+
+// Only zero-area triangles: the input is a segment and a point, which the hull still encloses.
+TEST(OuterHull, InputWithoutAnyProperTriangle) {
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 1, 0}, {2, 2, 0}, {0, 2, 0}};
+  mesh.triangles = {{0, 1, 2}, {3, 3, 3}};
+  const OuterHullOptions options{.max_triangles = 16};
+  const OuterHullResult hull = build_outer_hull(mesh, options);
+  expect_valid_outer_hull(mesh, options, hull);
+  EXPECT_TRUE(hull.reached_target);
 }
 
 TEST(OuterHull, ReturnsTheWrapWhenItIsWithinBudget) {
