@@ -42,6 +42,7 @@ cmake --build --preset release
 
 if [ "$mode" = demo ]; then
   ./build/release/apps/visproxy info build/release/meshes/bunny00.off
+  ./build/release/apps/visproxy build build/release/meshes/bunny00.off -o build/release/demo/bunny00
 else
   ctest --preset release
 fi

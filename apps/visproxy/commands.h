@@ -10,5 +10,6 @@ namespace visproxy::cli {
 enum ExitCode : int { kSuccess = 0, kCheckFailed = 1, kBadInput = 2, kInternalError = 3 };
 
 void add_info_command(CLI::App& app, int& exit_code);
+void add_build_command(CLI::App& app, int& exit_code);
 
 }  // namespace visproxy::cli

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
 
   int exit_code = kSuccess;
   add_info_command(app, exit_code);
+  add_build_command(app, exit_code);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,220 @@
+#include "proxy/build_proxies.h"
+
+#include <chrono>
+
+#include "core/errors.h"
+#include "mesh/mesh_topology.h"
+#include "proxy/alpha_wrap.h"
+#include "proxy/bounded_hull.h"
+#include "proxy/convex_hull.h"
+#include "proxy/outer_hull.h"
+#include "proxy/quadric_simplify.h"
+#include "proxy/surface_distance.h"
+#include "proxy/vertex_clustering.h"
+
+namespace visproxy {
+namespace {
+
+using nlohmann::json;
+
+json to_json(const Vertex& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+json box_json(const OrientedBox& box) {
+  json axes = json::array();
+  for (int k = 0; k < 3; ++k) axes.push_back(to_json(box.axes.col(k)));
+  return {{"center", to_json(box.center)}, {"axes", axes}, {"half_extents", to_json(box.half_extents)}};
+}
+
+// One builder run on one mesh (the whole input or one component).
+struct Piece {
+  TriangleMesh mesh;
+  std::vector<OrientedBox> boxes;
+  json result = json::object();
+};
+
+Piece build_piece(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOptions& options) {
+  const double diagonal = bounding_box(mesh).diagonal();
+  Piece piece;
+  switch (spec.method) {
+    case ProxyMethod::aabb: {
+      piece.mesh = axis_aligned_box_mesh(mesh);
+      const BoundingBox bounds = bounding_box(mesh);
+      piece.boxes.push_back({0.5 * (bounds.min + bounds.max), Eigen::Matrix3d::Identity(), 0.5 * (bounds.max - bounds.min)});
+      piece.result = {{"min", to_json(bounds.min)}, {"max", to_json(bounds.max)}};
+      break;
+    }
+    case ProxyMethod::obb: {
+      OrientedBoxResult box = build_oriented_box(mesh, {.seed = static_cast<std::uint32_t>(options.seed)});
+      piece.mesh = std::move(box.mesh);
+      piece.boxes.push_back(box.box);
+      piece.result = box_json(box.box);
+      piece.result["volume"] = box.box.volume();
+      piece.result["axes_from"] = box.axes_from;
+      piece.result["inflation_world"] = box.inflation_world;
+      break;
+    }
+    case ProxyMethod::convex_hull: {
+      ConvexHullResult hull = build_convex_hull(mesh);
+      piece.mesh = std::move(hull.mesh);
+      piece.result = {{"faces", hull.faces}, {"volume", hull.volume}};
+      break;
+    }
+    case ProxyMethod::bounded_hull: {
+      BoundedHullResult hull = build_bounded_hull(mesh, {.max_faces = spec.count});
+      piece.mesh = std::move(hull.mesh);
+      piece.result = {{"faces", hull.faces},
+                      {"volume", hull.volume},
+                      {"hull_volume", hull.exact_hull_volume},
+                      {"volume_over_hull", hull.added_volume_fraction()}};
+      break;
+    }
+    case ProxyMethod::alpha_wrap: {
+      AlphaWrapResult wrap =
+          build_alpha_wrap(mesh, {.alpha_relative = spec.alpha_relative, .offset_relative = spec.offset_relative});
+      piece.mesh = std::move(wrap.mesh);
+      piece.result = {{"alpha_world", wrap.alpha_world}, {"offset_world", wrap.offset_world}};
+      break;
+    }
+    case ProxyMethod::outer_hull: {
+      OuterHullResult outer = build_outer_hull(mesh, {.max_triangles = spec.count});
+      piece.mesh = std::move(outer.mesh);
+      piece.result = {{"reached_target", outer.reached_target},
+                      {"wrap_triangles", outer.wrap_triangles},
+                      {"wrap_alpha_world", outer.wrap_alpha_world},
+                      {"wrap_offset_world", outer.wrap_offset_world},
+                      {"max_distance_to_input_world", outer.max_distance_to_input_world}};
+      break;
+    }
+    case ProxyMethod::quadric: {
+      QuadricSimplifyResult simplified = simplify_quadric(mesh, {.max_triangles = spec.count});
+      piece.mesh = std::move(simplified.mesh);
+      piece.result = {{"collapses", simplified.collapses},
+                      {"max_quadric_error_world", simplified.max_quadric_error_relative * diagonal}};
+      break;
+    }
+    case ProxyMethod::clustering: {
+      VertexClusteringResult clustered = cluster_vertices(mesh, {.cell_size_relative = spec.cell_size_relative});
+      piece.mesh = std::move(clustered.mesh);
+      piece.result = {{"cell_size_world", clustered.cell_size_world},
+                      {"max_vertex_displacement_world", clustered.max_vertex_displacement_world}};
+      break;
+    }
+  }
+  return piece;
+}
+
+std::string describe(ProxyMethod method) {
+  switch (method) {
+    case ProxyMethod::aabb: return "axis-aligned bounding box";
+    case ProxyMethod::obb: return "oriented bounding box (CGAL optimal box, principal axes or axis-aligned: smallest)";
+    case ProxyMethod::convex_hull: return "convex hull (CGAL)";
+    case ProxyMethod::bounded_hull: return "convex hull simplified by greedy half-space removal";
+    case ProxyMethod::alpha_wrap: return "3D alpha wrap (CGAL)";
+    case ProxyMethod::outer_hull: return "alpha wrap decimated by conservative edge collapses";
+    case ProxyMethod::quadric: return "quadric edge collapse";
+    case ProxyMethod::clustering: return "vertex clustering";
+  }
+  return "";
+}
+
+json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds) {
+  switch (spec.method) {
+    case ProxyMethod::aabb:
+    case ProxyMethod::convex_hull: return json::object();
+    case ProxyMethod::obb: return json::object();
+    case ProxyMethod::bounded_hull: return {{"max_faces", spec.count}};
+    case ProxyMethod::outer_hull:
+    case ProxyMethod::quadric: return {{"max_triangles", spec.count}};
+    case ProxyMethod::alpha_wrap:
+      return {{"alpha_relative", spec.alpha_relative},
+              {"offset_relative", spec.offset_relative},
+              {"alpha_world", spec.alpha_relative * diagonal},
+              {"offset_world", spec.offset_relative * diagonal}};
+    case ProxyMethod::clustering:
+      return {{"cell_size_relative", spec.cell_size_relative},
+              {"cell_size_world", spec.cell_size_relative * (bounds.max - bounds.min).maxCoeff()}};
+  }
+  return json::object();
+}
+
+}  // namespace
+
+std::string_view primitive_type_name(PrimitiveType type) {
+  switch (type) {
+    case PrimitiveType::triangle: return "triangle";
+    case PrimitiveType::box: return "box";
+    case PrimitiveType::sphere: return "sphere";
+  }
+  return "triangle";
+}
+
+std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::filesystem::path& source,
+                                      std::span<const ProxySpec> specs, const BuildOptions& options) {
+  if (mesh.triangles.empty()) throw InvalidInputError(source, "the mesh has no triangles: nothing to build proxies of");
+  const BoundingBox bounds = bounding_box(mesh);
+  const double diagonal = bounds.diagonal();
+  const std::vector<TriangleMesh> parts = options.per_component ? split_components(mesh) : std::vector<TriangleMesh>{};
+  const std::vector<const TriangleMesh*> inputs = [&] {
+    std::vector<const TriangleMesh*> pointers;
+    if (options.per_component)
+      for (const TriangleMesh& part : parts) pointers.push_back(&part);
+    else
+      pointers.push_back(&mesh);
+    return pointers;
+  }();
+
+  std::vector<BuiltProxy> proxies;
+  for (const ProxySpec& spec : specs) {
+    if (options.on_start) options.on_start(spec.name());
+    BuiltProxy proxy;
+    proxy.spec = spec;
+    proxy.method = describe(spec.method);
+    proxy.params = params_of(spec, diagonal, bounds);
+    proxy.primitive_type = spec.method == ProxyMethod::aabb || spec.method == ProxyMethod::obb ? PrimitiveType::box
+                                                                                               : PrimitiveType::triangle;
+    const auto start = std::chrono::steady_clock::now();
+    json component_results = json::array();
+    for (std::size_t c = 0; c < inputs.size(); ++c) {
+      Piece piece;
+      try {
+        piece = build_piece(spec, *inputs[c], options);
+      } catch (const InvalidInputError& error) {
+        const std::string where = options.per_component ? " (component " + std::to_string(c) + ")" : "";
+        throw InvalidInputError(source, spec.text + where + ": " + error.problem());
+      }
+      append_mesh(proxy.mesh, piece.mesh);
+      proxy.boxes.insert(proxy.boxes.end(), piece.boxes.begin(), piece.boxes.end());
+      piece.result["triangles"] = piece.mesh.triangles.size();
+      component_results.push_back(std::move(piece.result));
+    }
+    proxy.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (proxy.mesh.triangles.empty())
+      throw InvalidInputError(source, spec.text + ": every triangle collapsed, the proxy would be empty" +
+                                          (spec.method == ProxyMethod::clustering ? " (use a smaller cell)" : ""));
+    proxy.primitives = proxy.primitive_type == PrimitiveType::box ? proxy.boxes.size() : proxy.mesh.triangles.size();
+    if (options.per_component) {
+      proxy.result = {{"components", component_results}};
+    } else {
+      proxy.result = std::move(component_results[0]);
+      proxy.result.erase("triangles");
+    }
+    if (proxy.primitive_type == PrimitiveType::box) {
+      json boxes = json::array();
+      for (const OrientedBox& box : proxy.boxes) boxes.push_back(box_json(box));
+      proxy.result["boxes"] = boxes;
+    }
+
+    const SurfaceDistance distance = sampled_hausdorff_distance(
+        proxy.mesh, mesh, {.samples_per_mesh = options.hausdorff_samples, .seed = options.seed});
+    proxy.error = {{"hausdorff_relative", diagonal > 0 ? distance.hausdorff_world() / diagonal : 0.0},
+                   {"hausdorff_world", distance.hausdorff_world()},
+                   {"proxy_to_mesh_world", distance.a_to_b_world},
+                   {"mesh_to_proxy_world", distance.b_to_a_world},
+                   {"samples_per_surface", options.hausdorff_samples},
+                   {"seed", options.seed}};
+    proxies.push_back(std::move(proxy));
+  }
+  return proxies;
+}
+
+}  // namespace visproxy

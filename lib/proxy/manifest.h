@@ -1,0 +1,32 @@
+#pragma once
+// The proxy folder: one file set per proxy and manifest.json listing them.
+// Schema: data/schemas/manifest.schema.json.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <span>
+
+#include "mesh/triangle_mesh.h"
+#include "proxy/build_proxies.h"
+
+namespace visproxy {
+
+/// The input mesh as the manifest describes it.
+struct ManifestMesh {
+  std::filesystem::path path;  ///< as the user gave it
+  std::size_t vertices = 0;
+  std::size_t triangles = 0;
+  std::size_t components = 0;
+  BoundingBox bounds;
+};
+
+/// The manifest entry of one proxy (everything but the file names).
+nlohmann::json manifest_entry(const BuiltProxy& proxy);
+
+/// Writes NAME.ply (binary) and NAME.obj for every proxy into `folder` (created if
+/// missing), then `folder`/manifest.json; every file is written under a temporary name
+/// and renamed, so a failure never leaves a partial file. Returns the manifest.
+nlohmann::json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh& mesh,
+                                  std::span<const BuiltProxy> proxies, const BuildOptions& options);
+
+}  // namespace visproxy
