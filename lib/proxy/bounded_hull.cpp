@@ -1,9 +1,9 @@
 // Bounded convex hull by progressive half-space removal.
 //
-// The greedy order is that of S. Melax, "Convex hull simplification with containment by
-// successive plane removal" (Game Programming Gems 2016 / talks from 2012 on) and of
-// A. Jacobson, "Progressive Convex Hull Simplification" (arXiv:2604.14468, 2026): remove
-// the plane whose removal adds the least volume. Like Jacobson, the work is done in the
+// The greedy order is that of S. Melax's convex hull simplification with containment by
+// successive plane removal (as described by C. Bloom, "A Note on Convex Hull
+// Simplification", 2011) and of A. Jacobson, "Progressive Convex Hull Simplification"
+// (arXiv:2604.14468, 2026): remove the plane whose removal adds the least volume. Like Jacobson, the work is done in the
 // dual: with the origin at a point strictly inside, the plane {x : p . x <= 1} is the
 // dual point p, the polytope is the polar of the convex hull of the dual points, its
 // faces are the dual hull's vertices and its corners the dual hull's triangles. Removing
@@ -14,13 +14,15 @@
 //
 // Every combinatorial decision (which triangles fill the hole, whether the region stays
 // bounded) is an exact orientation test on the dual points as rounded to double, so the
-// dual structure is always the exact hull of those points. The cost (the volume of the
+// dual structure stays the exact hull of those points (up to how faces with more than
+// three coplanar points are triangulated). The cost (the volume of the
 // cap the removal adds) is computed in double and only orders the removals. The output's
 // corners are computed in double; containment of the input is then checked exactly.
 
 #include "proxy/bounded_hull.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Exact_rational.h>
 
 #include <algorithm>
 #include <array>
@@ -65,6 +67,23 @@ struct Plane {
 Vertex meeting_point(const Vertex& a, const Vertex& b, const Vertex& c) {
   const double determinant = a.dot(b.cross(c));
   return (b.cross(c) + c.cross(a) + a.cross(b)) / determinant;
+}
+
+// meeting_point(a, b, c) + center computed in exact rational arithmetic, rounded once.
+Vertex exact_meeting_point(const Vertex& a, const Vertex& b, const Vertex& c, const Vertex& center) {
+  using Rational = CGAL::Exact_rational;
+  using Vector = std::array<Rational, 3>;
+  auto exact = [](const Vertex& v) { return Vector{Rational(v.x()), Rational(v.y()), Rational(v.z())}; };
+  auto cross = [](const Vector& u, const Vector& v) {
+    return Vector{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  };
+  const Vector ea = exact(a), eb = exact(b), ec = exact(c);
+  const Vector bc = cross(eb, ec), ca = cross(ec, ea), ab = cross(ea, eb);
+  const Rational determinant = ea[0] * bc[0] + ea[1] * bc[1] + ea[2] * bc[2];
+  assert(!CGAL::is_zero(determinant));
+  Vertex point;
+  for (int k = 0; k < 3; ++k) point[k] = CGAL::to_double((bc[k] + ca[k] + ab[k]) / determinant + Rational(center[k]));
+  return point;
 }
 
 // Outward triangles seen as fans: next(center, from) is the vertex that follows `from`
@@ -326,19 +345,16 @@ Polytope polytope_of_planes(const std::vector<Plane>& planes, const Vertex& cent
   for (const DualTriangle& t : triangles) dual_mesh.triangles.push_back({t[0], t[1], t[2]});
   std::size_t corner_count = 0;
   const std::vector<std::uint32_t> corner_of_triangle = hull_detail::planar_facets(dual_mesh, corner_count);
-  // Each corner from its best-conditioned triple of planes.
+  // Each corner exactly, from any triangle of its group (their planes all meet there),
+  // then rounded once: no cancellation, no overflow, whatever the planes' angles.
   std::vector<Vertex> corners(corner_count);
-  std::vector<double> best_determinant(corner_count, -1.0);
+  std::vector<bool> placed(corner_count, false);
   for (std::size_t t = 0; t < triangles.size(); ++t) {
-    const Vertex& a = duals[triangles[t][0]];
-    const Vertex& b = duals[triangles[t][1]];
-    const Vertex& c = duals[triangles[t][2]];
-    const double determinant = std::abs(a.dot(b.cross(c)));
     const std::uint32_t corner = corner_of_triangle[t];
-    if (determinant > best_determinant[corner]) {
-      best_determinant[corner] = determinant;
-      corners[corner] = meeting_point(a, b, c) + center;
-    }
+    if (placed[corner]) continue;
+    placed[corner] = true;
+    corners[corner] = exact_meeting_point(duals[triangles[t][0]], duals[triangles[t][1]], duals[triangles[t][2]], center);
+    if (!corners[corner].allFinite()) throw std::logic_error("bounded hull: a corner is beyond the range of double");
   }
 
   // Each plane's face: the corners of the dual triangles around it, counter-clockwise

@@ -35,14 +35,19 @@ struct BoundedHullResult {
 ///
 /// Method: start from the planes of the exact convex hull's facets (build_convex_hull,
 /// coplanar facets merged) and repeatedly remove the plane whose removal adds the least
-/// volume; a removal that would leave an unbounded region is never taken. Removing a
-/// half-space only grows the polytope, so it contains the hull. The kept planes are then
-/// moved out to touch the hull vertices, the polytope's corners are computed in double,
-/// and containment is checked with exact predicates on the output triangles: every
-/// input vertex is on the inner side of, or on, the plane of every output triangle. Where
-/// rounding left a vertex outside, the offending planes are moved outward by a small
-/// amount relative to the bounding-box diagonal and the check is repeated until it passes,
-/// so the returned mesh always contains every input vertex, exactly.
+/// volume; a removal that would leave an unbounded region is never taken (decided
+/// exactly). Removing a half-space only grows the polytope, so it contains the hull. The
+/// kept planes are then moved out to touch the hull vertices, the polytope's corners are
+/// computed exactly from the planes and rounded to double, and containment is checked with
+/// exact predicates on the output triangles: every input vertex must be on the inner side
+/// of, or on, the plane of every output triangle. Where rounding left a vertex outside, the
+/// offending planes are moved outward by a few units in the last place of the coordinates
+/// (doubled each round) and the check is repeated until it passes, so the returned mesh
+/// always contains every input vertex, exactly.
+///
+/// Where more than three kept planes meet at one point (often at a hull vertex), the
+/// rounded planes meet in several corners a rounding error apart: the mesh then has tiny
+/// edges and sliver triangles there, and is convex up to that rounding.
 ///
 /// Returns the exact hull itself when it already has at most max_faces faces.
 /// A flat input (all vertices coplanar) is returned as its exact flat hull (see
@@ -56,8 +61,9 @@ struct BoundedHullResult {
 /// (by Steinitz's theorem some plane of 7 or more is always removable, so this happens
 /// for max_faces 4 or 5 only, e.g. a box asked for 5 faces).
 ///
-/// O(H log H) for H hull facets, plus O(V_hull * max_faces) for the containment check.
-/// Deterministic.
+/// O(H log H) for H hull facets when the faces have boundedly many neighbours (each removal
+/// is cubic in its face's neighbour count), plus O(V_hull * max_faces) for the containment
+/// check. Deterministic: the same input and options give the same mesh, bit for bit.
 BoundedHullResult build_bounded_hull(const TriangleMesh& mesh, const BoundedHullOptions& options = {});
 
 }  // namespace visproxy

@@ -8,10 +8,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
-#include <array>
-#include <cmath>
-#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/errors.h"
 #include "proxy/hull_facets.h"
@@ -77,7 +76,10 @@ TriangleMesh two_sided_polygon(std::vector<Vertex> polygon) {
 ConvexHullResult build_convex_hull(const TriangleMesh& mesh) {
   std::vector<bool> referenced(mesh.positions.size(), false);
   for (const Triangle& triangle : mesh.triangles)
-    for (const VertexIndex index : triangle) referenced[index] = true;
+    for (const VertexIndex index : triangle) {
+      if (index >= mesh.positions.size()) reject("a triangle refers to a vertex the mesh does not have");
+      referenced[index] = true;
+    }
   std::vector<Vertex> points;
   for (std::size_t i = 0; i < mesh.positions.size(); ++i)
     if (referenced[i]) points.push_back(mesh.positions[i]);

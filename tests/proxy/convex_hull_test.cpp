@@ -146,6 +146,9 @@ TEST(ConvexHull, NothingToHullIsAnError) {
   collinear.positions = {{0, 0, 0}, {1, 1, 1}, {3, 3, 3}, {-2, -2, -2}};
   collinear.triangles = {{0, 1, 2}, {0, 2, 3}};
   expect_throws_saying(collinear, "one line");
+  TriangleMesh dangling = testing::tetrahedron();
+  dangling.triangles.push_back({0, 1, 4});
+  expect_throws_saying(dangling, "does not have");
   TriangleMesh infinite = testing::tetrahedron();
   infinite.positions[2].y() = std::numeric_limits<double>::infinity();
   expect_throws_saying(infinite, "non-finite");

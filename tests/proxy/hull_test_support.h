@@ -81,8 +81,10 @@ inline ::testing::AssertionResult is_convex_within(const TriangleMesh& mesh, dou
   return ::testing::AssertionSuccess();
 }
 
-/// Closed, manifold, consistently oriented, one component, sphere topology.
+/// Finite corners; closed, manifold, consistently oriented, one component, sphere topology.
 inline ::testing::AssertionResult is_closed_polytope_surface(const TriangleMesh& mesh) {
+  for (const Vertex& p : mesh.positions)
+    if (!p.allFinite()) return ::testing::AssertionFailure() << "a corner has a non-finite coordinate";
   const MeshTopology topology = analyze_topology(mesh);
   if (!topology.closed()) return ::testing::AssertionFailure() << topology.boundary_edges << " boundary edges";
   if (!topology.manifold())
