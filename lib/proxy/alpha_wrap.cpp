@@ -11,12 +11,12 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/alpha_wrap_3.h>
 
-#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "core/errors.h"
+#include "proxy/triangle_soup.h"
 
 namespace visproxy {
 namespace {
@@ -64,31 +64,14 @@ AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOption
   std::vector<Point> points;
   points.reserve(mesh.positions.size());
   for (const Vertex& p : mesh.positions) points.push_back(point(p));
-  std::vector<std::array<VertexIndex, 3>> proper;
+  const SoupPrimitives primitives = soup_primitives(mesh);
   std::vector<CgalSegment> segments;
+  for (const auto& [from, to] : primitives.segments) segments.emplace_back(point(from), point(to));
   std::vector<Point> lone_points;
-  proper.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) {
-    const Point& a = points[t[0]];
-    const Point& b = points[t[1]];
-    const Point& c = points[t[2]];
-    if (!CGAL::collinear(a, b, c)) {
-      proper.push_back(t);
-      continue;
-    }
-    // Collinear corners: the triangle is the segment between its two farthest corners.
-    const std::array<std::pair<Point, Point>, 3> sides = {{{a, b}, {b, c}, {c, a}}};
-    const auto& longest = *std::max_element(sides.begin(), sides.end(), [](const auto& x, const auto& y) {
-      return CGAL::squared_distance(x.first, x.second) < CGAL::squared_distance(y.first, y.second);
-    });
-    if (longest.first == longest.second)
-      lone_points.push_back(longest.first);
-    else
-      segments.emplace_back(longest.first, longest.second);
-  }
+  for (const Vertex& p : primitives.points) lone_points.push_back(point(p));
 
   SoupOracle oracle(result.alpha_world, SegmentOracle(PointOracle(Kernel()), Kernel()), Kernel());
-  oracle.add_triangle_soup(points, proper);
+  oracle.add_triangle_soup(points, primitives.triangles);
   if (!segments.empty()) oracle.add_segment_soup(segments);
   if (!lone_points.empty()) oracle.add_point_set(lone_points);
 

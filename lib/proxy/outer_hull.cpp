@@ -55,6 +55,7 @@
 #include "core/random.h"
 #include "mesh/mesh_topology.h"
 #include "proxy/alpha_wrap.h"
+#include "proxy/triangle_soup.h"
 
 namespace visproxy {
 namespace {
@@ -160,23 +161,12 @@ std::optional<bool> inside_by_parity(const Point& x, double reach, Random& direc
 class InputGeometry {
  public:
   explicit InputGeometry(const TriangleMesh& mesh) {
-    for (const Triangle& t : mesh.triangles) {
-      const Point a = to_point(mesh.positions[t[0]]);
-      const Point b = to_point(mesh.positions[t[1]]);
-      const Point c = to_point(mesh.positions[t[2]]);
-      if (!CGAL::collinear(a, b, c)) {
-        triangles_.emplace_back(a, b, c);
-        continue;
-      }
-      const std::array<CgalSegment, 3> sides = {CgalSegment(a, b), CgalSegment(b, c), CgalSegment(c, a)};
-      const CgalSegment& longest = *std::max_element(sides.begin(), sides.end(), [](const auto& s, const auto& r) {
-        return s.squared_length() < r.squared_length();
-      });
-      if (longest.is_degenerate())
-        points_.push_back(a);
-      else
-        segments_.push_back(longest);
-    }
+    const SoupPrimitives primitives = soup_primitives(mesh);
+    for (const Triangle& t : primitives.triangles)
+      triangles_.emplace_back(to_point(mesh.positions[t[0]]), to_point(mesh.positions[t[1]]),
+                              to_point(mesh.positions[t[2]]));
+    for (const auto& [from, to] : primitives.segments) segments_.emplace_back(to_point(from), to_point(to));
+    for (const Vertex& p : primitives.points) points_.push_back(to_point(p));
     triangle_tree_.insert(triangles_.begin(), triangles_.end());
     triangle_tree_.build();
     if (!segments_.empty()) {
