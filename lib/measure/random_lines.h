@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh/sphere_set.h"
 #include "mesh/triangle_mesh.h"
 #include "trace/ray_scene.h"
 
@@ -11,10 +12,6 @@ namespace visproxy {
 
 /// A sphere that contains every vertex triangles use: centred on the bounding box,
 /// radius half its diagonal (slightly enlarged so that no vertex lies on it).
-struct Sphere {
-  Vertex center = Vertex::Zero();
-  double radius = 0.0;
-};
 Sphere bounding_sphere(const TriangleMesh& mesh);
 
 /// `count` isotropic random lines through `sphere`, each given as the chord between two

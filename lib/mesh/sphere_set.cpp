@@ -1,0 +1,100 @@
+#include "mesh/sphere_set.h"
+
+#include <charconv>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/errors.h"
+#include "core/files.h"
+#include "mesh/subdivide.h"
+
+namespace visproxy {
+namespace {
+
+void append_number(std::string& out, double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);  // shortest round-trip form
+  out.append(buffer, result.ptr);
+}
+
+double finite_number(const nlohmann::json& value, const std::filesystem::path& path, const std::string& what) {
+  if (!value.is_number()) throw InvalidInputError(path, what + " is not a number");
+  const double number = value.get<double>();
+  if (!std::isfinite(number)) throw InvalidInputError(path, what + " is not finite");
+  return number;
+}
+
+TriangleMesh unit_icosphere(int levels) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  TriangleMesh mesh;
+  mesh.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  mesh.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                    {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  mesh = subdivide_midpoint(mesh, levels);
+  for (Vertex& p : mesh.positions) p.normalize();
+  return mesh;
+}
+
+}  // namespace
+
+std::string encode_sphere_set(const std::vector<Sphere>& spheres) {
+  std::string out = "{\"spheres\": [";
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    out += i == 0 ? "\n  {\"center\": [" : ",\n  {\"center\": [";
+    for (int axis = 0; axis < 3; ++axis) {
+      if (axis > 0) out += ", ";
+      append_number(out, spheres[i].center[axis]);
+    }
+    out += "], \"radius\": ";
+    append_number(out, spheres[i].radius);
+    out += '}';
+  }
+  out += spheres.empty() ? "]}\n" : "\n]}\n";
+  return out;
+}
+
+void write_sphere_set(const std::filesystem::path& path, const std::vector<Sphere>& spheres) {
+  write_file_atomically(path, encode_sphere_set(spheres));
+}
+
+std::vector<Sphere> read_sphere_set(const std::filesystem::path& path) {
+  const std::string bytes = read_file(path);
+  const nlohmann::json document = nlohmann::json::parse(bytes, nullptr, /*allow_exceptions=*/false);
+  if (document.is_discarded()) throw InvalidInputError(path, "not valid JSON");
+  if (!document.is_object() || !document.contains("spheres") || !document["spheres"].is_array())
+    throw InvalidInputError(path, "expected an object with a \"spheres\" array");
+  std::vector<Sphere> spheres;
+  spheres.reserve(document["spheres"].size());
+  for (const nlohmann::json& item : document["spheres"]) {
+    const std::string what = "sphere " + std::to_string(spheres.size());
+    if (!item.is_object() || !item.contains("center") || !item.contains("radius"))
+      throw InvalidInputError(path, what + " needs \"center\" and \"radius\"");
+    const nlohmann::json& center = item["center"];
+    if (!center.is_array() || center.size() != 3)
+      throw InvalidInputError(path, what + ": \"center\" must be an array of 3 numbers");
+    Sphere sphere;
+    for (int axis = 0; axis < 3; ++axis)
+      sphere.center[axis] = finite_number(center[static_cast<std::size_t>(axis)], path, what + " centre");
+    sphere.radius = finite_number(item["radius"], path, what + " radius");
+    if (sphere.radius < 0) throw InvalidInputError(path, what + " has a negative radius");
+    spheres.push_back(sphere);
+  }
+  return spheres;
+}
+
+TriangleMesh sphere_set_mesh(const std::vector<Sphere>& spheres, int levels) {
+  const TriangleMesh unit = unit_icosphere(levels);
+  TriangleMesh mesh;
+  mesh.positions.reserve(spheres.size() * unit.positions.size());
+  mesh.triangles.reserve(spheres.size() * unit.triangles.size());
+  for (const Sphere& sphere : spheres) {
+    TriangleMesh part = unit;
+    for (Vertex& p : part.positions) p = sphere.center + sphere.radius * p;
+    append_mesh(mesh, part);
+  }
+  return mesh;
+}
+
+}  // namespace visproxy

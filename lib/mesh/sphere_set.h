@@ -1,0 +1,37 @@
+#pragma once
+// Sets of spheres: the primitives of sphere proxies, their JSON file and a mesh for viewing.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+struct Sphere {
+  Vertex center = Vertex::Zero();
+  double radius = 0.0;
+
+  friend bool operator==(const Sphere&, const Sphere&) = default;
+};
+
+/// The bytes of a sphere-set file:
+///   {"spheres": [{"center": [x, y, z], "radius": r}, ...]}
+/// with shortest round-trip numbers, so reading it back gives the same doubles.
+std::string encode_sphere_set(const std::vector<Sphere>& spheres);
+
+/// Writes encode_sphere_set(spheres) to `path` atomically; throws IOError on failure.
+void write_sphere_set(const std::filesystem::path& path, const std::vector<Sphere>& spheres);
+
+/// Reads a sphere-set file. Throws IOError when it cannot be read and InvalidInputError
+/// naming the file when it is not valid JSON of the shape above, or a centre or radius is
+/// not finite, or a radius is negative.
+std::vector<Sphere> read_sphere_set(const std::filesystem::path& path);
+
+/// Every sphere as a closed triangle mesh (an icosahedron subdivided `levels` times and
+/// pushed onto the sphere), joined into one mesh: for looking at sphere proxies in a mesh
+/// viewer. Its vertices lie on the spheres, so it is slightly smaller than they are.
+TriangleMesh sphere_set_mesh(const std::vector<Sphere>& spheres, int levels = 2);
+
+}  // namespace visproxy

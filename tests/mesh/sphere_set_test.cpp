@@ -1,0 +1,74 @@
+#include "mesh/sphere_set.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/errors.h"
+#include "core/files.h"
+#include "mesh/mesh_topology.h"
+#include "test_support.h"
+
+namespace visproxy {
+namespace {
+
+using SphereSetFile = testing::ScratchFolder;
+
+TEST_F(SphereSetFile, RoundTripsEveryDoubleExactly) {
+  const std::vector<Sphere> spheres = {{{0.1, 1.0 / 3.0, -7.5e200}, 2.5e-300}, {{-1, 0, 1}, 0.0}, {{1e-7, 3, 4}, 1.0 / 7.0}};
+  const auto path = folder_ / "spheres.json";
+  write_sphere_set(path, spheres);
+  EXPECT_EQ(read_sphere_set(path), spheres);
+  write_sphere_set(path, {});
+  EXPECT_TRUE(read_sphere_set(path).empty());
+}
+
+TEST_F(SphereSetFile, RejectsMalformedFilesNamingTheProblem) {
+  const auto path = folder_ / "bad.json";
+  const std::pair<const char*, const char*> cases[] = {
+      {"{\"spheres\": [", "not valid JSON"},
+      {"[1, 2]", "\"spheres\" array"},
+      {"{\"spheres\": [{\"center\": [0, 0], \"radius\": 1}]}", "3 numbers"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0]}]}", "needs \"center\" and \"radius\""},
+      {"{\"spheres\": [{\"center\": [0, 0, \"x\"], \"radius\": 1}]}", "not a number"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": -1}]}", "negative radius"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1e999}]}", "not valid JSON"},  // overflows
+  };
+  for (const auto& [text, problem] : cases) {
+    write_file_atomically(path, text);
+    try {
+      read_sphere_set(path);
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const InvalidInputError& error) {
+      EXPECT_NE(std::string(error.what()).find(problem), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find("bad.json"), std::string::npos) << error.what();
+    }
+  }
+}
+
+TEST(SphereSetMesh, IsClosedOutwardAndOnTheSpheres) {
+  const std::vector<Sphere> spheres = {{{1, 2, 3}, 0.5}, {{-4, 0, 0}, 2.0}};
+  const TriangleMesh mesh = sphere_set_mesh(spheres, 2);
+  ASSERT_EQ(mesh.triangles.size(), 2u * 20 * 16);
+  const MeshTopology topology = analyze_topology(mesh);
+  EXPECT_TRUE(topology.closed());
+  EXPECT_EQ(topology.components, 2u);
+  // Each half lies on its sphere and encloses a positive volume a little below the ball's.
+  const std::size_t per_sphere = mesh.positions.size() / 2;
+  for (std::size_t s = 0; s < 2; ++s) {
+    double volume = 0;
+    for (std::size_t t = s * 320; t < (s + 1) * 320; ++t) {
+      const Triangle& tri = mesh.triangles[t];
+      volume += mesh.positions[tri[0]].dot(mesh.positions[tri[1]].cross(mesh.positions[tri[2]])) / 6.0;
+    }
+    const double ball = 4.0 / 3.0 * std::numbers::pi * std::pow(spheres[s].radius, 3);
+    EXPECT_GT(volume, 0.9 * ball);
+    EXPECT_LT(volume, ball);
+    for (std::size_t v = s * per_sphere; v < (s + 1) * per_sphere; ++v)
+      EXPECT_NEAR((mesh.positions[v] - spheres[s].center).norm(), spheres[s].radius, 1e-12);
+  }
+}
+
+}  // namespace
+}  // namespace visproxy
