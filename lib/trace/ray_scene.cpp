@@ -4,6 +4,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cmath>
 #include <limits>
 #include <mutex>
 #include <string>
@@ -27,12 +28,71 @@ void record_error(void* user, RTCError code, const char* text) {
     state->message = "Embree error " + std::to_string(static_cast<int>(code)) + ": " + (text ? text : "");
 }
 
+float round_down(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
+}
+
+float round_up(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
+}
+
+void sphere_bounds(const RTCBoundsFunctionArguments* args) {
+  const Sphere& sphere = static_cast<const Sphere*>(args->geometryUserPtr)[args->primID];
+  RTCBounds* bounds = args->bounds_o;
+  bounds->lower_x = round_down(sphere.center.x() - sphere.radius);
+  bounds->lower_y = round_down(sphere.center.y() - sphere.radius);
+  bounds->lower_z = round_down(sphere.center.z() - sphere.radius);
+  bounds->upper_x = round_up(sphere.center.x() + sphere.radius);
+  bounds->upper_y = round_up(sphere.center.y() + sphere.radius);
+  bounds->upper_z = round_up(sphere.center.z() + sphere.radius);
+}
+
+// Whether the ray's parameter interval (tnear, tfar) meets the closed ball: the roots of
+// |o + t d - c|^2 = r^2, in double precision from the ray's float values.
+bool ray_meets_ball(const Sphere& sphere, const Vertex& origin, const Vertex& direction, double tnear, double tfar) {
+  const Vertex offset = origin - sphere.center;
+  const double a = direction.squaredNorm();
+  const double b = direction.dot(offset);
+  const double c = offset.squaredNorm() - sphere.radius * sphere.radius;
+  if (a == 0) return c <= 0 && tnear < tfar;
+  const double discriminant = b * b - a * c;
+  if (discriminant < 0) return false;
+  // Stable roots: q = -(b + sign(b) sqrt(disc)), t = q / a and c / q.
+  const double root = std::sqrt(discriminant);
+  const double q = -(b + std::copysign(root, b));
+  double t0 = q / a;
+  double t1 = q != 0 ? c / q : t0;
+  if (t0 > t1) std::swap(t0, t1);
+  return t1 > tnear && t0 < tfar;
+}
+
+void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
+  const Sphere& sphere = static_cast<const Sphere*>(args->geometryUserPtr)[args->primID];
+  for (unsigned lane = 0; lane < args->N; ++lane) {
+    if (args->valid[lane] == 0) continue;
+    RTCRayN* ray = args->ray;
+    const unsigned n = args->N;
+    const Vertex origin(RTCRayN_org_x(ray, n, lane), RTCRayN_org_y(ray, n, lane), RTCRayN_org_z(ray, n, lane));
+    const Vertex direction(RTCRayN_dir_x(ray, n, lane), RTCRayN_dir_y(ray, n, lane), RTCRayN_dir_z(ray, n, lane));
+    float& tfar = RTCRayN_tfar(ray, n, lane);
+    if (ray_meets_ball(sphere, origin, direction, RTCRayN_tnear(ray, n, lane), tfar))
+      tfar = -std::numeric_limits<float>::infinity();
+  }
+}
+
+// Closest-hit queries are not offered by RayScene; the intersect callback only has to be
+// valid. It reports nothing, so rtcIntersect on a sphere scene finds no hit.
+void sphere_intersect(const RTCIntersectFunctionNArguments*) {}
+
 }  // namespace
 
 struct RayScene::Impl {
   ErrorState errors;
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  std::vector<Sphere> spheres;  // user geometry data: must outlive the scene
 
   void throw_if_failed() {
     std::lock_guard lock(errors.mutex);
@@ -44,13 +104,41 @@ struct RayScene::Impl {
   }
 };
 
-RayScene::RayScene(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
-  impl_->device = rtcNewDevice(nullptr);
-  if (!impl_->device) throw Error("Embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
-  rtcSetDeviceErrorFunction(impl_->device, record_error, &impl_->errors);
-  impl_->scene = rtcNewScene(impl_->device);
-  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+std::unique_ptr<RayScene::Impl> RayScene::make_impl() {
+  auto impl = std::make_unique<RayScene::Impl>();
+  impl->device = rtcNewDevice(nullptr);
+  if (!impl->device) throw Error("Embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
+  rtcSetDeviceErrorFunction(impl->device, record_error, &impl->errors);
+  impl->scene = rtcNewScene(impl->device);
+  rtcSetSceneBuildQuality(impl->scene, RTC_BUILD_QUALITY_HIGH);
+  rtcSetSceneFlags(impl->scene, RTC_SCENE_FLAG_ROBUST);
+  impl->throw_if_failed();
+  return impl;
+}
+
+void RayScene::commit() {
+  rtcCommitScene(impl_->scene);
   impl_->throw_if_failed();
+}
+
+RayScene::RayScene(std::span<const Sphere> spheres) : impl_(make_impl()) {
+  impl_->spheres.assign(spheres.begin(), spheres.end());
+  if (!spheres.empty()) {
+    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
+    impl_->throw_if_failed();
+    rtcSetGeometryUserPrimitiveCount(geometry, static_cast<unsigned>(impl_->spheres.size()));
+    rtcSetGeometryUserData(geometry, impl_->spheres.data());
+    rtcSetGeometryBoundsFunction(geometry, sphere_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geometry, sphere_intersect);
+    rtcSetGeometryOccludedFunction(geometry, sphere_occluded);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(impl_->scene, geometry);
+    rtcReleaseGeometry(geometry);
+  }
+  commit();
+}
+
+RayScene::RayScene(const TriangleMesh& mesh) : impl_(make_impl()) {
 
   if (!mesh.triangles.empty()) {
     RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -72,8 +160,7 @@ RayScene::RayScene(const TriangleMesh& mesh) : impl_(std::make_unique<Impl>()) {
     rtcAttachGeometry(impl_->scene, geometry);
     rtcReleaseGeometry(geometry);
   }
-  rtcCommitScene(impl_->scene);
-  impl_->throw_if_failed();
+  commit();
 }
 
 RayScene::~RayScene() = default;

@@ -1,13 +1,15 @@
 #pragma once
-// Embree behind one small RAII type: a triangle mesh made ready for ray queries.
-// Embree holds single-precision vertices: positions are rounded to float, so a query that
-// grazes the surface within about 1e-7 of the mesh's extent may be answered either way.
+// Embree behind one small RAII type: a triangle mesh or a set of solid balls made ready
+// for ray queries. Embree holds single-precision vertices and rays: positions are rounded
+// to float, so a query that grazes the surface within about 1e-7 of the scene's extent may
+// be answered either way. Balls are intersected in double precision by our own code.
 
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
 
+#include "mesh/sphere_set.h"
 #include "mesh/triangle_mesh.h"
 
 namespace visproxy {
@@ -18,17 +20,21 @@ struct Segment {
   Vertex to;
 };
 
-/// A triangle mesh in an Embree scene (its own device, BVH built on construction).
+/// A triangle mesh or a sphere set in an Embree scene (its own device, BVH built on
+/// construction, robust traversal so that rays do not slip through shared edges).
 /// Queries are const and may run from many threads at once. Embree errors, including
 /// running out of memory, are thrown as visproxy::Error.
 class RayScene {
  public:
   explicit RayScene(const TriangleMesh& mesh);
+  /// Solid balls: a segment is blocked when it meets any ball, including when it starts or
+  /// ends inside one (unlike Embree's sphere points, which skip those hits).
+  explicit RayScene(std::span<const Sphere> spheres);
   ~RayScene();
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
 
-  /// True when the segment hits a triangle (either side).
+  /// True when the segment hits a triangle (either side) or a ball.
   bool segment_blocked(const Segment& segment) const;
 
   /// segment_blocked for every segment (#S entries, 1 = blocked), in parallel.
@@ -37,6 +43,8 @@ class RayScene {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  static std::unique_ptr<Impl> make_impl();
+  void commit();
 };
 
 }  // namespace visproxy
