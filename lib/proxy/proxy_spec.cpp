@@ -34,15 +34,6 @@ double parse_fraction(std::string_view spec, std::string_view what, std::string_
 
 }  // namespace
 
-std::string_view kind_name(ProxyKind kind) {
-  switch (kind) {
-    case ProxyKind::outside: return "outside";
-    case ProxyKind::inside: return "inside";
-    case ProxyKind::general: return "general";
-  }
-  return "general";
-}
-
 std::string ProxySpec::name() const {
   std::string name = text;
   for (char& c : name)

@@ -16,12 +16,10 @@
 #include <string_view>
 #include <vector>
 
+#include "core/proxy_kind.h"
+
 namespace visproxy {
 
-/// What a proxy promises about the geometry it stands in for (Billen et al., section 3):
-/// an outside proxy contains it, an inside proxy lies within it, a general proxy neither.
-enum class ProxyKind { outside, inside, general };
-std::string_view kind_name(ProxyKind kind);
 
 enum class ProxyMethod { aabb, obb, convex_hull, bounded_hull, alpha_wrap, outer_hull, quadric, clustering };
 

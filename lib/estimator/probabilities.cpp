@@ -1,0 +1,171 @@
+// Optimal probabilities of the stochastic visibility estimator: Billen, Lagae, Dutre,
+// "Probabilistic visibility evaluation using geometry proxies", sections 3.2-4.2
+// (eq. 14/16 for the variance, 22-24 for the cost heuristic; the closed forms here are
+// written without the singularities of the printed ones, see probabilities.h).
+
+#include "estimator/probabilities.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace visproxy {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+bool needs_p2(ProxyKind kind) { return kind != ProxyKind::inside; }
+bool needs_p3(ProxyKind kind) { return kind != ProxyKind::outside; }
+
+double term(double weight, double probability) {
+  if (weight == 0) return 0;
+  return probability > 0 ? weight / probability : kInfinity;
+}
+
+// a / (a + b) for non-negative a, b, and 1 when both are 0.
+double share(double a, double b) { return a + b > 0 ? a / (a + b) : 1.0; }
+
+// Mixes the needed terms with a uniform choice among them so that each is at least `floor`.
+Probabilities apply_floor(ProxyKind kind, Probabilities p, double floor) {
+  if (floor <= 0) return p;
+  const int needed = 1 + (needs_p2(kind) ? 1 : 0) + (needs_p3(kind) ? 1 : 0);
+  floor = std::min(floor, 1.0 / needed);
+  const double keep = 1.0 - needed * floor;
+  p.p1 = keep * p.p1 + floor;
+  p.p2 = needs_p2(kind) ? keep * p.p2 + floor : 0.0;
+  p.p3 = needs_p3(kind) ? keep * p.p3 + floor : 0.0;
+  return p;
+}
+
+// Minimum of a convex function on [lo, hi] by golden-section search.
+template <typename F>
+double golden_section(F f, double lo, double hi) {
+  const double ratio = (std::sqrt(5.0) - 1) / 2;
+  double a = lo, b = hi;
+  double c = b - ratio * (b - a), d = a + ratio * (b - a);
+  double fc = f(c), fd = f(d);
+  for (int i = 0; i < 200 && b - a > 1e-13; ++i) {
+    if (fc <= fd) {
+      b = d, d = c, fd = fc;
+      c = b - ratio * (b - a), fc = f(c);
+    } else {
+      a = c, c = d, fc = fd;
+      d = a + ratio * (b - a), fd = f(d);
+    }
+  }
+  return (a + b) / 2;
+}
+
+}  // namespace
+
+RayTypeFractions RayTypeFractions::from(const RayTypeCounts& counts) {
+  RayTypeFractions fractions;
+  const std::uint64_t total = counts.total();
+  if (total == 0) return fractions;
+  for (int i = 0; i < 4; ++i) fractions.f[i] = static_cast<double>(counts.counts[i]) / static_cast<double>(total);
+  return fractions;
+}
+
+double RayTypeFractions::f_hit() const { return f[0] + f[1] > 0 ? f[0] / (f[0] + f[1]) : 1.0; }
+double RayTypeFractions::f_miss() const { return f[2] + f[3] > 0 ? f[3] / (f[2] + f[3]) : 1.0; }
+
+double estimator_variance(const RayTypeFractions& fractions, const Probabilities& p) {
+  if (fractions.empty()) return 0;
+  const auto& f = fractions.f;
+  const double v = fractions.v_avg();
+  const double second_moment = term(f[1] + f[3], p.p1) + term(f[2], p.p2) + term(f[1], p.p3);
+  return std::isinf(second_moment) ? kInfinity : std::max(0.0, second_moment - v * v);
+}
+
+Probabilities equal_probabilities(ProxyKind kind) {
+  switch (kind) {
+    case ProxyKind::outside: return {0.5, 0.5, 0.0};
+    case ProxyKind::inside: return {0.5, 0.0, 0.5};
+    case ProxyKind::general: break;
+  }
+  return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+}
+
+Probabilities optimal_probabilities(ProxyKind kind, const RayTypeFractions& fractions,
+                                    const OptimalProbabilityOptions& options) {
+  if (fractions.empty()) return equal_probabilities(kind);
+  Probabilities p;
+  switch (kind) {
+    case ProxyKind::outside: {
+      const double f_miss = fractions.f_miss();
+      p.p1 = share(std::sqrt(f_miss), std::sqrt(1 - f_miss));
+      p.p2 = 1 - p.p1;
+      p.p3 = 0;
+      break;
+    }
+    case ProxyKind::inside: {
+      const double v = fractions.v_avg();
+      const double f_hit = fractions.f_hit();
+      const double s = 1 - f_hit * (1 - v);
+      // (s - sqrt((1 - f_hit)(1 - V) s)) / V, rewritten with s - (1 - f_hit)(1 - V) = V.
+      p.p1 = share(std::sqrt(s), std::sqrt(std::max(0.0, (1 - f_hit) * (1 - v))));
+      p.p2 = 0;
+      p.p3 = 1 - p.p1;
+      break;
+    }
+    case ProxyKind::general: {
+      const auto& f = fractions.f;
+      const double a = std::sqrt(f[1] + f[3]), b = std::sqrt(f[2]), c = std::sqrt(f[1]);
+      const double sum = a + b + c;
+      if (sum == 0) {
+        p = {1, 0, 0};
+      } else {
+        p.p2 = b / sum;
+        p.p3 = c / sum;
+        p.p1 = 1 - p.p2 - p.p3;
+      }
+      break;
+    }
+  }
+  return apply_floor(kind, p, options.floor);
+}
+
+Probabilities minimise_variance_numerically(ProxyKind kind, const RayTypeFractions& fractions) {
+  if (fractions.empty()) return equal_probabilities(kind);
+  constexpr double lo = 1e-12, hi = 1 - 1e-12;
+  switch (kind) {
+    case ProxyKind::outside: {
+      const double p1 = golden_section(
+          [&](double x) { return estimator_variance(fractions, {x, 1 - x, 0}); }, lo, hi);
+      return {p1, 1 - p1, 0};
+    }
+    case ProxyKind::inside: {
+      const double p1 = golden_section(
+          [&](double x) { return estimator_variance(fractions, {x, 0, 1 - x}); }, lo, hi);
+      return {p1, 0, 1 - p1};
+    }
+    case ProxyKind::general: break;
+  }
+  // min over p1 of (min over p2 of Var(p1, p2, 1 - p1 - p2)): both convex.
+  auto best_p2 = [&](double p1) {
+    return golden_section([&](double x) { return estimator_variance(fractions, {p1, x, 1 - p1 - x}); }, lo * (1 - p1),
+                          (1 - p1) * hi);
+  };
+  const double p1 = golden_section(
+      [&](double x) {
+        const double p2 = best_p2(x);
+        return estimator_variance(fractions, {x, p2, 1 - x - p2});
+      },
+      lo, hi);
+  const double p2 = best_p2(p1);
+  return {p1, p2, 1 - p1 - p2};
+}
+
+Probabilities apply_cost_heuristic(ProxyKind kind, const Probabilities& probabilities,
+                                   const RayTypeFractions& fractions, double floor) {
+  if (fractions.empty()) return probabilities;
+  const double agreeing = fractions.f[0] + fractions.f[3];
+  const double scale = std::pow(std::max(0.0, 1 - agreeing), 0.25);
+  Probabilities p = probabilities;
+  p.p2 *= scale;
+  p.p3 *= scale;
+  p.p1 = 1 - p.p2 - p.p3;
+  return apply_floor(kind, p, floor);
+}
+
+}  // namespace visproxy

@@ -1,0 +1,96 @@
+#pragma once
+// The unbiased stochastic visibility estimator's probabilities and variance
+// (Billen, Lagae, Dutre: "Probabilistic visibility evaluation using geometry proxies").
+//
+// A shadow ray xy falls in one of four types by the exact visibility V (mesh P) and the
+// proxy's visibility V' (proxy P'), V = 1 meaning unoccluded:
+//   type 1: V = 0, V' = 0    type 2: V = 0, V' = 1    type 3: V = 1, V' = 0    type 4: V = 1, V' = 1
+// The estimator (eq. 8) picks one of three terms with probabilities p1 + p2 + p3 = 1:
+//   (a) V' / p1   (b) (1 - V') V / p2   (c) -V' (1 - V) / p3
+// Its variance over a population of rays with type fractions f1..f4 is (eq. 14, 16)
+//   Var = w1 / p1 + w2 / p2 + w3 / p3 - V_avg^2,   w1 = f2 + f4,  w2 = f3,  w3 = f2,
+// with V_avg = f3 + f4. Every term with a non-zero weight needs a non-zero probability:
+// a term that is never chosen while its rays exist makes the estimate biased.
+
+#include <array>
+#include <cstdint>
+
+#include "core/proxy_kind.h"
+
+namespace visproxy {
+
+/// How many rays of each type were seen: counts[0] is type 1, ..., counts[3] is type 4.
+struct RayTypeCounts {
+  std::array<std::uint64_t, 4> counts{};
+
+  std::uint64_t total() const { return counts[0] + counts[1] + counts[2] + counts[3]; }
+  void add(bool mesh_blocked, bool proxy_blocked) {
+    ++counts[mesh_blocked ? (proxy_blocked ? 0 : 1) : (proxy_blocked ? 2 : 3)];
+  }
+};
+
+/// Fractions f1..f4 of the ray types; they sum to 1 unless no ray was seen (all 0).
+struct RayTypeFractions {
+  std::array<double, 4> f{};
+
+  static RayTypeFractions from(const RayTypeCounts& counts);
+  bool empty() const { return f[0] + f[1] + f[2] + f[3] == 0; }
+  double v_avg() const { return f[2] + f[3]; }
+  /// f_hit = f1 / (f1 + f2): how often the proxy blocks a ray the mesh blocks; 1 when
+  /// no ray is blocked by the mesh (nothing to miss).
+  double f_hit() const;
+  /// f_miss = f4 / (f3 + f4): how often the proxy lets through a ray the mesh lets
+  /// through; 1 when every ray is blocked by the mesh.
+  double f_miss() const;
+};
+
+struct Probabilities {
+  double p1 = 1.0 / 3;  ///< trace the proxy only
+  double p2 = 1.0 / 3;  ///< trace the proxy, and the mesh when the proxy was hit
+  double p3 = 1.0 / 3;  ///< trace the proxy, and the mesh when the proxy was missed
+};
+
+/// The estimator's variance per ray (eq. 14/16) for rays with `fractions` drawn with
+/// `probabilities`. A term with weight 0 costs nothing whatever its probability; a term
+/// with positive weight and probability 0 gives +infinity (the estimate would be biased).
+/// 0 for an empty population.
+double estimator_variance(const RayTypeFractions& fractions, const Probabilities& probabilities);
+
+/// Equal probabilities among the terms the kind needs: outside {1/2, 1/2, 0}, inside
+/// {1/2, 0, 1/2}, general {1/3, 1/3, 1/3}.
+Probabilities equal_probabilities(ProxyKind kind);
+
+struct OptimalProbabilityOptions {
+  /// Lower bound of every probability the kind needs (p1 always; p2 unless inside; p3
+  /// unless outside), so that rays of a type the probe rays did not see still have a
+  /// term that accounts for them. 0 gives the exact minimiser of eq. 16; a renderer that
+  /// chooses probabilities from a few probe rays needs a positive floor to stay unbiased.
+  double floor = 0;
+};
+
+/// The probabilities that minimise eq. 16 among those the kind allows.
+///   outside (p3 = 0): p1 = sqrt(f_miss) / (sqrt(f_miss) + sqrt(1 - f_miss));
+///   inside (p2 = 0), s = 1 - f_hit (1 - V_avg): p1 = (s - sqrt((1 - f_hit)(1 - V_avg) s)) / V_avg;
+///   general: eq. 14 is a sum of w_i / p_i, minimised on the simplex by p_i = sqrt(w_i) / sum_j sqrt(w_j).
+/// The outside and inside forms are that same rule with w3 = 0 or w2 = 0, evaluated in a
+/// way that has no singularity (the paper's outside form divides 0 by 0 at f_miss = 1/2,
+/// its inside form at V_avg = 0). When every needed weight is 0 (all rays of type 1, or
+/// all of type 4) any choice has zero variance and p1 = 1 (cheapest). An empty population
+/// gives equal_probabilities(kind). The result is always finite and sums to 1.
+Probabilities optimal_probabilities(ProxyKind kind, const RayTypeFractions& fractions,
+                                    const OptimalProbabilityOptions& options = {});
+
+/// Minimises eq. 16 numerically over the probabilities the kind allows (golden-section
+/// search along p1 for outside and inside; nested golden-section search over (p1, p2) for
+/// general). Slower than optimal_probabilities and independent of its closed forms: the
+/// two are checked against each other.
+Probabilities minimise_variance_numerically(ProxyKind kind, const RayTypeFractions& fractions);
+
+/// The cost heuristic (eq. 22-24): p2 and p3 scaled by (1 - (f1 + f4))^(1/4), p1 takes
+/// the rest, so that rays where proxy and mesh agree mostly trace the proxy alone. The
+/// scaled p2 and p3 are then raised to `floor` if the kind needs them (see
+/// OptimalProbabilityOptions::floor).
+Probabilities apply_cost_heuristic(ProxyKind kind, const Probabilities& probabilities,
+                                   const RayTypeFractions& fractions, double floor = 0);
+
+}  // namespace visproxy

@@ -1,0 +1,184 @@
+#include "estimator/probabilities.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/random.h"
+
+namespace visproxy {
+namespace {
+
+// Fractions of the ray types a proxy of `kind` can produce, on a grid over
+// (f_hit, f_miss, V_avg) that includes the edges 0 and 1.
+std::vector<RayTypeFractions> grid(ProxyKind kind) {
+  const double steps[] = {0.0, 0.01, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99, 1.0};
+  std::vector<RayTypeFractions> out;
+  for (double f_hit : steps)
+    for (double f_miss : steps)
+      for (double v : steps) {
+        if (kind == ProxyKind::outside && f_hit != 1.0) continue;
+        if (kind == ProxyKind::inside && f_miss != 1.0) continue;
+        RayTypeFractions fractions;
+        fractions.f = {f_hit * (1 - v), (1 - f_hit) * (1 - v), (1 - f_miss) * v, f_miss * v};
+        out.push_back(fractions);
+      }
+  return out;
+}
+
+TEST(EstimatorVariance, MatchesEquation16InTermsOfHitMissAndVisibility) {
+  const double f_hit = 0.7, f_miss = 0.4, v = 0.35;
+  RayTypeFractions fractions;
+  fractions.f = {f_hit * (1 - v), (1 - f_hit) * (1 - v), (1 - f_miss) * v, f_miss * v};
+  const Probabilities p{0.5, 0.3, 0.2};
+  const double eq16 = (1 - v) * (1 - f_hit) * (p.p1 + p.p3) / (p.p1 * p.p3) + v * (1 - f_miss) / p.p2 +
+                      v * f_miss / p.p1 - v * v;
+  EXPECT_NEAR(estimator_variance(fractions, p), eq16, 1e-12);
+}
+
+// The variance formula is the second moment of the estimator minus V_avg^2: simulate it.
+TEST(EstimatorVariance, AgreesWithSimulatedEstimator) {
+  RayTypeFractions fractions;
+  fractions.f = {0.3, 0.1, 0.2, 0.4};
+  const Probabilities p{0.5, 0.25, 0.25};
+  Random random(11);
+  const int n = 2'000'000;
+  double sum = 0, sum_squares = 0;
+  for (int i = 0; i < n; ++i) {
+    const double u = random.uniform();
+    const int type = u < 0.3 ? 1 : u < 0.4 ? 2 : u < 0.6 ? 3 : 4;
+    const double v_exact = type >= 3 ? 1 : 0, v_proxy = (type == 2 || type == 4) ? 1 : 0;
+    const double pick = random.uniform();
+    const double estimate = pick < p.p1 ? v_proxy / p.p1
+                            : pick < p.p1 + p.p2 ? (1 - v_proxy) * v_exact / p.p2
+                                                 : -v_proxy * (1 - v_exact) / p.p3;
+    sum += estimate;
+    sum_squares += estimate * estimate;
+  }
+  const double mean = sum / n, variance = sum_squares / n - mean * mean;
+  const double expected = estimator_variance(fractions, p);
+  // Mean: unbiased (V_avg = 0.6); standard error sqrt(Var / n) ~ 0.001, so 5 sigma.
+  EXPECT_NEAR(mean, 0.6, 5 * std::sqrt(expected / n));
+  EXPECT_NEAR(variance, expected, 0.01 * expected);
+}
+
+TEST(EstimatorVariance, NeverChosenTermWithRaysIsInfiniteAndUnusedTermIsFree) {
+  RayTypeFractions outside;
+  outside.f = {0.5, 0.0, 0.2, 0.3};
+  EXPECT_TRUE(std::isfinite(estimator_variance(outside, {0.5, 0.5, 0.0})));
+  EXPECT_TRUE(std::isinf(estimator_variance(outside, {0.5, 0.0, 0.5})));
+  EXPECT_EQ(estimator_variance(RayTypeFractions{}, {1, 0, 0}), 0.0);
+}
+
+class OptimalProbabilities : public ::testing::TestWithParam<ProxyKind> {};
+
+TEST_P(OptimalProbabilities, ClosedFormsMatchNumericMinimisationOnAGrid) {
+  const ProxyKind kind = GetParam();
+  int compared = 0;
+  for (const RayTypeFractions& fractions : grid(kind)) {
+    const Probabilities closed = optimal_probabilities(kind, fractions);
+    const Probabilities numeric = minimise_variance_numerically(kind, fractions);
+    ASSERT_NEAR(closed.p1 + closed.p2 + closed.p3, 1.0, 1e-15);
+    const double v_closed = estimator_variance(fractions, closed);
+    const double v_numeric = estimator_variance(fractions, numeric);
+    ASSERT_TRUE(std::isfinite(v_closed));
+    // The closed form is never worse than the numeric minimum (up to its tolerance) ...
+    EXPECT_LE(v_closed, v_numeric + 1e-9 * (1 + v_numeric)) << fractions.f[0] << " " << fractions.f[1] << " "
+                                                            << fractions.f[2] << " " << fractions.f[3];
+    // ... and where the minimiser is unique (every needed weight positive), it is the same point.
+    const auto& f = fractions.f;
+    const bool unique = f[1] + f[3] > 0 && (kind == ProxyKind::inside || f[2] > 0) && (kind == ProxyKind::outside || f[1] > 0);
+    if (unique) {
+      EXPECT_NEAR(closed.p1, numeric.p1, 1e-5);
+      EXPECT_NEAR(closed.p2, numeric.p2, 1e-5);
+      EXPECT_NEAR(closed.p3, numeric.p3, 1e-5);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 20);
+}
+
+TEST_P(OptimalProbabilities, AreNeverWorseThanEqualProbabilities) {
+  const ProxyKind kind = GetParam();
+  for (const RayTypeFractions& fractions : grid(kind))
+    EXPECT_LE(estimator_variance(fractions, optimal_probabilities(kind, fractions)),
+              estimator_variance(fractions, equal_probabilities(kind)) + 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Kinds, OptimalProbabilities,
+                         ::testing::Values(ProxyKind::outside, ProxyKind::inside, ProxyKind::general),
+                         [](const auto& kind) { return std::string(kind_name(kind.param)); });
+
+TEST(OptimalProbabilities, OutsideAndInsideMatchThePrintedFormulasAwayFromTheirSingularities) {
+  for (double f_miss : {0.05, 0.3, 0.7, 0.95}) {
+    RayTypeFractions fractions;
+    const double v = 0.4;
+    fractions.f = {1 - v, 0, (1 - f_miss) * v, f_miss * v};
+    const double printed = (f_miss - std::sqrt(f_miss - f_miss * f_miss)) / (2 * f_miss - 1);
+    EXPECT_NEAR(optimal_probabilities(ProxyKind::outside, fractions).p1, printed, 1e-12);
+  }
+  for (double f_hit : {0.05, 0.5, 0.95})
+    for (double v : {0.1, 0.5, 0.9}) {
+      RayTypeFractions fractions;
+      fractions.f = {f_hit * (1 - v), (1 - f_hit) * (1 - v), 0, v};
+      const double s = 1 - f_hit * (1 - v);
+      const double spec = (s - std::sqrt((1 - f_hit) * (1 - v) * s)) / v;
+      EXPECT_NEAR(optimal_probabilities(ProxyKind::inside, fractions).p1, spec, 1e-12);
+    }
+}
+
+TEST(OptimalProbabilities, DegenerateCasesAreFiniteAndDocumented) {
+  RayTypeFractions all_blocked;  // V_avg = 0, every ray of type 1
+  all_blocked.f = {1, 0, 0, 0};
+  RayTypeFractions all_free;  // V_avg = 1, every ray of type 4
+  all_free.f = {0, 0, 0, 1};
+  RayTypeFractions half;  // f_miss = 1/2: the printed outside form is 0/0 here
+  half.f = {0.5, 0, 0.25, 0.25};
+  RayTypeFractions inside_dark;  // V_avg = 0 with misses: the printed inside form is 0/0
+  inside_dark.f = {0.6, 0.4, 0, 0};
+  for (ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general}) {
+    EXPECT_EQ(optimal_probabilities(kind, all_blocked).p1, 1.0);
+    EXPECT_EQ(optimal_probabilities(kind, all_free).p1, 1.0);
+    const Probabilities empty = optimal_probabilities(kind, RayTypeFractions{});
+    const Probabilities equal = equal_probabilities(kind);
+    EXPECT_EQ(empty.p1, equal.p1);
+    EXPECT_EQ(empty.p2, equal.p2);
+    EXPECT_EQ(empty.p3, equal.p3);
+  }
+  EXPECT_DOUBLE_EQ(optimal_probabilities(ProxyKind::outside, half).p1, 0.5);
+  EXPECT_DOUBLE_EQ(optimal_probabilities(ProxyKind::inside, inside_dark).p1, 0.5);
+}
+
+TEST(OptimalProbabilities, FloorKeepsEveryNeededTermAndTheSum) {
+  RayTypeFractions fractions;
+  fractions.f = {0, 0, 0, 1};
+  const Probabilities p = optimal_probabilities(ProxyKind::general, fractions, {.floor = 0.05});
+  EXPECT_NEAR(p.p1 + p.p2 + p.p3, 1.0, 1e-15);
+  EXPECT_GE(p.p2, 0.05);
+  EXPECT_GE(p.p3, 0.05);
+  const Probabilities outside = optimal_probabilities(ProxyKind::outside, fractions, {.floor = 0.05});
+  EXPECT_GE(outside.p2, 0.05);
+  EXPECT_EQ(outside.p3, 0.0);
+}
+
+TEST(CostHeuristic, ShiftsProbabilityToTheProxyWhereProxyAndMeshAgree) {
+  RayTypeFractions agreeing;
+  agreeing.f = {0.6, 0.0, 0.01, 0.39};  // f1 + f4 = 0.99
+  const Probabilities p = optimal_probabilities(ProxyKind::outside, agreeing);
+  const Probabilities q = apply_cost_heuristic(ProxyKind::outside, p, agreeing);
+  EXPECT_NEAR(q.p2, p.p2 * std::pow(0.01, 0.25), 1e-12);
+  EXPECT_GT(q.p1, p.p1);
+  EXPECT_NEAR(q.p1 + q.p2 + q.p3, 1.0, 1e-15);
+  RayTypeFractions disagreeing;
+  disagreeing.f = {0.0, 0.0, 0.5, 0.5};
+  const Probabilities r = apply_cost_heuristic(ProxyKind::outside, p, disagreeing);
+  EXPECT_NEAR(r.p2, p.p2 * std::pow(0.5, 0.25), 1e-12);
+  RayTypeFractions all_agree;
+  all_agree.f = {0.5, 0, 0, 0.5};
+  EXPECT_EQ(apply_cost_heuristic(ProxyKind::outside, p, all_agree).p2, 0.0);
+  EXPECT_GE(apply_cost_heuristic(ProxyKind::outside, p, all_agree, 0.05).p2, 0.05);
+}
+
+}  // namespace
+}  // namespace visproxy
