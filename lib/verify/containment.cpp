@@ -12,11 +12,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <cassert>
 #include <optional>
 
 #include "core/errors.h"
 #include "core/random.h"
+#include "mesh/mesh_topology.h"
 
 namespace visproxy {
 namespace {
@@ -144,20 +147,68 @@ Containment check_containment(const TriangleMesh& container, const TriangleMesh&
   for (const Triangle& t : contents.triangles)
     for (VertexIndex v : t) used[v] = 1;
   std::vector<Vertex> points;
+  std::vector<VertexIndex> point_vertex;
   for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) points.push_back(contents.positions[v]);
+    if (used[v]) {
+      points.push_back(contents.positions[v]);
+      point_vertex.push_back(static_cast<VertexIndex>(v));
+    }
 
   Containment result;
   result.vertices_checked = points.size();
-  for (PointLocation location : locate_points(container, points)) {
-    if (location == PointLocation::outside) ++result.vertices_outside;
-    if (location == PointLocation::on_boundary) ++result.vertices_on_boundary;
+  const std::vector<PointLocation> locations = locate_points(container, points);
+  for (std::size_t i = 0; i < locations.size(); ++i) {
+    if (locations[i] == PointLocation::outside) {
+      if (result.vertices_outside++ == 0) result.first_vertex_outside = point_vertex[i];
+    }
+    if (locations[i] == PointLocation::on_boundary) ++result.vertices_on_boundary;
   }
-  if (options.check_surface) {
+
+  if (options.convex_components) {
+    std::vector<bool> vertex_contained(contents.positions.size(), true);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      vertex_contained[point_vertex[i]] = locations[i] != PointLocation::outside;
+    const std::vector<TriangleMesh> pieces = split_components(container);
+    std::vector<std::vector<bool>> in_piece(pieces.size());
+    for (std::size_t c = 0; c < pieces.size(); ++c) {
+      in_piece[c].assign(contents.positions.size(), false);
+      const std::vector<PointLocation> piece_locations = locate_points(pieces[c], points);
+      for (std::size_t i = 0; i < points.size(); ++i)
+        in_piece[c][point_vertex[i]] = piece_locations[i] != PointLocation::outside;
+    }
+    for (std::size_t t = 0; t < contents.triangles.size(); ++t) {
+      const Triangle& triangle = contents.triangles[t];
+      bool all_contained = true, together = false;
+      for (VertexIndex v : triangle) all_contained = all_contained && vertex_contained[v];
+      for (std::size_t c = 0; c < pieces.size() && !together; ++c)
+        together = in_piece[c][triangle[0]] && in_piece[c][triangle[1]] && in_piece[c][triangle[2]];
+      if (all_contained && !together && result.triangles_split++ == 0)
+        result.first_triangle_split = static_cast<std::uint32_t>(t);
+    }
+  } else if (options.check_surface) {
     result.surface_checked = true;
-    result.crossing_triangle_pairs = find_crossing_triangles(container, contents).size();
+    const auto crossings = find_crossing_triangles(container, contents);
+    result.crossing_triangle_pairs = crossings.size();
+    if (!crossings.empty()) result.first_crossing = crossings.front();
   }
   return result;
+}
+
+ClosestDistance closest_distance_to_surface(const TriangleMesh& mesh, std::span<const Vertex> points) {
+  ClosestDistance closest{std::numeric_limits<double>::infinity(), 0};
+  if (mesh.triangles.empty() || points.empty()) return closest;
+  const Triangles triangles = triangles_of(mesh);
+  Tree tree(triangles.begin(), triangles.end());
+  tree.build();
+  tree.accelerate_distance_queries();
+  std::vector<double> squared(points.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) squared[i] = tree.squared_distance(to_point(points[i]));
+  });
+  const auto smallest = std::min_element(squared.begin(), squared.end());
+  closest.distance = std::sqrt(*smallest);
+  closest.point = static_cast<std::size_t>(smallest - squared.begin());
+  return closest;
 }
 
 }  // namespace visproxy

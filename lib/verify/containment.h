@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -35,6 +36,12 @@ struct ContainmentOptions {
   /// With it, a closed container provably contains the whole contents surface, not only
   /// its vertices (for convex containers the vertex test alone already implies that).
   bool check_surface = true;
+  /// The container's connected components are each convex (one box or hull per
+  /// component of the input). Then a contents triangle is contained exactly when one
+  /// component contains its three vertices, which is checked instead of the surface
+  /// (check_surface is ignored): convex containers touch what they hold, so the surface
+  /// test would reject them.
+  bool convex_components = false;
 };
 
 struct Containment {
@@ -42,13 +49,31 @@ struct Containment {
   std::size_t vertices_outside = 0;      ///< strictly outside the container
   std::size_t vertices_on_boundary = 0;  ///< exactly on a container triangle (still contained)
   std::size_t crossing_triangle_pairs = 0;  ///< 0 unless check_surface found some
+  /// With convex_components: triangles whose vertices are all contained but in no single
+  /// component together.
+  std::size_t triangles_split = 0;
   bool surface_checked = false;
+  std::optional<VertexIndex> first_vertex_outside;  ///< lowest index of a vertex outside
+  /// Lowest (container triangle, contents triangle) pair that meets.
+  std::optional<std::pair<std::uint32_t, std::uint32_t>> first_crossing;
+  std::optional<std::uint32_t> first_triangle_split;  ///< lowest contents triangle split
   /// Vertices inside or on, and (when checked) no surface crossings.
-  bool contained() const { return vertices_outside == 0 && crossing_triangle_pairs == 0; }
+  bool contained() const { return vertices_outside == 0 && crossing_triangle_pairs == 0 && triangles_split == 0; }
 };
 
 /// Whether closed mesh `container` contains `contents` (see ContainmentOptions).
 Containment check_containment(const TriangleMesh& container, const TriangleMesh& contents,
                               const ContainmentOptions& options = {});
+
+struct ClosestDistance {
+  double distance = 0;     ///< world units; +infinity when there are no points or no triangles
+  std::size_t point = 0;   ///< index of the point that attains it
+};
+
+/// The smallest Euclidean distance from any of `points` to the surface of `mesh` (its
+/// triangles, closest points computed in double precision by CGAL's AABB tree; accurate
+/// to rounding, not exact). For a proxy that contains the mesh, the distance from the
+/// mesh's vertices to the proxy's surface is the margin by which it contains them.
+ClosestDistance closest_distance_to_surface(const TriangleMesh& mesh, std::span<const Vertex> points);
 
 }  // namespace visproxy

@@ -113,6 +113,13 @@ TEST(CheckContainment, ScaledCopyInsideAndCrossingCopy) {
   EXPECT_FALSE(out.contained());
   EXPECT_EQ(out.vertices_outside, 1u);
   EXPECT_GT(out.crossing_triangle_pairs, 0u);
+  // The counterexamples name the vertex outside (the apex of the tetrahedron) and a pair.
+  ASSERT_TRUE(out.first_vertex_outside.has_value());
+  EXPECT_GT(poking.positions[*out.first_vertex_outside].z(), 1.0);
+  ASSERT_TRUE(out.first_crossing.has_value());
+  EXPECT_LT(out.first_crossing->first, cube.triangles.size());
+  EXPECT_LT(out.first_crossing->second, poking.triangles.size());
+  EXPECT_FALSE(inside.first_vertex_outside.has_value());
 
   // A flat triangle lying in the cube's face is on the boundary, and touches it.
   TriangleMesh flat;
@@ -136,6 +143,34 @@ TEST(CheckContainment, SurfaceCrossingWithAllVerticesInsideIsCaught) {
   EXPECT_EQ(result.vertices_outside, 0u);
   EXPECT_GT(result.crossing_triangle_pairs, 0u);
   EXPECT_FALSE(result.contained());
+}
+
+TEST(CheckContainment, ConvexComponentsNeedOneComponentHoldingEachTriangle) {
+  const TriangleMesh two = merged(testing::unit_cube(), transformed(testing::unit_cube(), 1, {3, 0, 0}));
+  TriangleMesh sliver;
+  sliver.positions = {{0.5, 0.5, 0.5}, {3.5, 0.5, 0.5}, {3.5, 0.6, 0.5}};
+  sliver.triangles = {{0, 1, 2}};
+  const Containment split = check_containment(two, sliver, {.convex_components = true});
+  EXPECT_EQ(split.vertices_outside, 0u);
+  EXPECT_EQ(split.triangles_split, 1u);
+  EXPECT_EQ(split.first_triangle_split, 0u);
+  EXPECT_FALSE(split.contained());
+  // A triangle lying in a face of one cube touches it, and is contained: the surface test
+  // would reject it, the convex test accepts it.
+  TriangleMesh in_face;
+  in_face.positions = {{3.1, 0.1, 0}, {3.9, 0.1, 0}, {3.1, 0.9, 0}, {0.2, 0.2, 0.2}, {0.8, 0.2, 0.2}, {0.2, 0.8, 0.9}};
+  in_face.triangles = {{0, 1, 2}, {3, 4, 5}};
+  EXPECT_TRUE(check_containment(two, in_face, {.convex_components = true}).contained());
+  EXPECT_FALSE(check_containment(two, in_face).contained());
+}
+
+TEST(ClosestDistance, FromPointsToACubeSurface) {
+  const TriangleMesh cube = testing::unit_cube();
+  const std::vector<Vertex> points = {{0.5, 0.5, 0.5}, {0.5, 0.5, 0.9}, {2, 2, 2}};
+  const ClosestDistance closest = closest_distance_to_surface(cube, points);
+  EXPECT_NEAR(closest.distance, 0.1, 1e-12);
+  EXPECT_EQ(closest.point, 1u);
+  EXPECT_TRUE(std::isinf(closest_distance_to_surface(cube, {}).distance));
 }
 
 }  // namespace
