@@ -1,0 +1,70 @@
+#pragma once
+// How well a proxy stands in for a mesh on a set of rays: ray types, f_hit, f_miss,
+// V_avg, GSSA ratio, optimal probabilities, variance and cost (Billen et al., section 3;
+// definitions in SPEC.md, "Errata and exact definitions").
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/proxy_kind.h"
+#include "estimator/probabilities.h"
+#include "measure/proportion.h"
+#include "trace/ray_scene.h"
+
+namespace visproxy {
+
+struct TimingOptions {
+  std::size_t rays = 200000;  ///< the first this many rays are timed (all if fewer)
+  int repeats = 3;            ///< the fastest of this many passes is kept
+};
+
+/// Wall time per ray of segment_blocked on one thread, in nanoseconds: the cost of a
+/// shadow ray against `scene` on one core. The fastest of options.repeats passes over
+/// the first options.rays rays, after one untimed pass to warm caches. 0 for no rays.
+double nanoseconds_per_ray(const RayScene& scene, std::span<const Segment> rays, const TimingOptions& options = {});
+
+/// The rays and what the exact mesh does to them, computed once and shared by every proxy.
+struct ReferenceRays {
+  std::vector<Segment> rays;
+  std::vector<std::uint8_t> mesh_blocked;  ///< 1 where the mesh blocks rays[i]
+  double mesh_ns_per_ray = 0;
+};
+ReferenceRays trace_reference(const RayScene& mesh, std::vector<Segment> rays, const TimingOptions& timing = {});
+
+struct ProxyMeasurement {
+  RayTypeCounts counts;
+  Proportion f_hit;   ///< type 1 among rays the mesh blocks
+  Proportion f_miss;  ///< type 4 among rays the mesh lets through
+  Proportion v_avg;   ///< rays the mesh lets through (types 3 and 4)
+  /// (f1 + f3) / (f1 + f2): how often the proxy blocks a ray relative to the mesh; under
+  /// isotropic lines the ratio of their generalised shadowing surface areas. 95 %
+  /// interval by the delta method for a ratio of two multinomial proportions; 0 (and
+  /// [0, +inf)) when no ray hits the mesh.
+  double gssa_ratio = 0, gssa_ratio_lower = 0, gssa_ratio_upper = 0;
+  /// The kind whose optimal probabilities were used: the proxy's own, or `general` when
+  /// these rays contradict its claim (an outside proxy missed by a ray the mesh blocks,
+  /// an inside proxy hit by a ray the mesh lets through), where the kind's form with its
+  /// zero probability would be biased.
+  ProxyKind probability_form = ProxyKind::general;
+  std::uint64_t rays_contradicting_claim = 0;
+  Probabilities optimal;
+  double variance_optimal = 0;  ///< eq. 16 per ray at `optimal`
+  double variance_equal = 0;    ///< eq. 16 per ray at equal_probabilities(probability_form)
+  double proxy_ns_per_ray = 0;  ///< nanoseconds_per_ray of the proxy on the timed rays
+  double mesh_ns_per_ray = 0;   ///< same for the mesh, from the ReferenceRays
+  /// Expected cost per estimate in ns at `optimal`: the proxy is always traced, the mesh
+  /// with probability p2 on rays that hit the proxy and p3 on rays that miss it.
+  double estimator_ns_per_ray = 0;
+};
+
+/// Measures `proxy` (a proxy of `kind`) on the reference rays: every ray traced against
+/// it in parallel, the cost timed on one thread on the same rays as the mesh.
+ProxyMeasurement measure_proxy(const ReferenceRays& reference, const RayScene& proxy, ProxyKind kind,
+                               const TimingOptions& timing = {});
+
+/// The counting part of measure_proxy, for callers that trace themselves.
+ProxyMeasurement measure_from_counts(const RayTypeCounts& counts, ProxyKind kind);
+
+}  // namespace visproxy
