@@ -20,16 +20,6 @@ std::string point_text(const Vertex& p) {
   return buffer;
 }
 
-std::vector<Vertex> used_vertices(const TriangleMesh& mesh) {
-  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
-  for (const Triangle& t : mesh.triangles)
-    for (VertexIndex v : t) used[v] = 1;
-  std::vector<Vertex> points;
-  for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) points.push_back(mesh.positions[v]);
-  return points;
-}
-
 bool is_convex_method(const json& entry) {
   const std::string spec = entry.value("spec", "");
   const std::string method = spec.substr(0, spec.find(':'));
@@ -63,7 +53,7 @@ json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& c
                      " has its corners in different convex parts of the " + container_name;
     result["margin"] = 0.0;
   } else {
-    result["margin"] = closest_distance_to_surface(container, used_vertices(contents)).distance;
+    result["margin"] = closest_distance_to_surface(container, used_positions(contents)).distance;
   }
   result["counterexample"] = counterexample.empty() ? json(nullptr) : json(counterexample);
   return result;
