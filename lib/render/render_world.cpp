@@ -1,0 +1,211 @@
+#include "render/render_world.h"
+
+#include <limits>
+
+#include "core/errors.h"
+#include "trace/embree_support.h"
+
+namespace visproxy {
+namespace {
+
+constexpr unsigned kMeshMask = 1u;
+constexpr unsigned kLightMask = 2u;
+
+// An intersect context that carries which instances a query sees; the scenes' context
+// filter function reads it (Embree passes the context to every hit it considers).
+struct FilterContext {
+  RTCIntersectContext context;
+  InstanceFilter filter;
+};
+
+void instance_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* context = reinterpret_cast<const FilterContext*>(args->context);
+  for (unsigned lane = 0; lane < args->N; ++lane) {
+    if (args->valid[lane] == 0) continue;
+    const auto instance = static_cast<int>(RTCHitN_instID(args->hit, args->N, lane, 0));
+    if ((context->filter.skip >= 0 && instance == context->filter.skip) ||
+        (context->filter.only >= 0 && instance != context->filter.only))
+      args->valid[lane] = 0;
+  }
+}
+
+}  // namespace
+
+struct RenderWorld::Impl {
+  EmbreeDevice device;
+  std::vector<RTCScene> owned;  // released at the end
+  std::vector<std::vector<Sphere>> sphere_storage;
+  RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
+  std::vector<Eigen::Matrix3d> normal_matrices;  // per instance, object to world normals
+  std::vector<int> light_of_triangle;
+  std::vector<Vertex> light_normals;  // per light triangle, unit, world
+  std::vector<ProxyKind> stochastic_kinds;  // per instance; outside for exact (mesh itself)
+  std::vector<bool> has_outside;
+  std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
+
+  ~Impl() {
+    for (RTCScene scene : owned) rtcReleaseScene(scene);
+  }
+
+  RTCScene scene_of(const InstanceProxy& p) {
+    RTCScene scene = device.new_scene();
+    owned.push_back(scene);
+    if (!p.spheres.empty()) {
+      sphere_storage.push_back(p.spheres);
+      attach_spheres(device, scene, sphere_storage.back());
+    } else if (!p.mesh.triangles.empty()) {
+      attach_triangles(device, scene, p.mesh);
+    }
+    rtcCommitScene(scene);
+    device.throw_if_failed();
+    return scene;
+  }
+
+  RTCScene top_scene() {
+    RTCScene scene = device.new_scene();
+    owned.push_back(scene);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+    return scene;
+  }
+
+  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask) {
+    RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+    device.throw_if_failed();
+    rtcSetGeometryInstancedScene(geometry, object);
+    float matrix[12];
+    for (int column = 0; column < 4; ++column)
+      for (int row = 0; row < 3; ++row) matrix[3 * column + row] = static_cast<float>(transform.matrix()(row, column));
+    rtcSetGeometryTransform(geometry, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, matrix);
+    rtcSetGeometryMask(geometry, mask);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(top, geometry, id);
+    rtcReleaseGeometry(geometry);
+    device.throw_if_failed();
+  }
+
+  bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+    FilterContext context;
+    rtcInitIntersectContext(&context.context);
+    context.context.filter = instance_filter;
+    context.filter = filter;
+    RTCRay ray = segment_ray(from, to);
+    ray.mask = kMeshMask;
+    rtcOccluded1(scene, &context.context, &ray);
+    return ray.tfar == -std::numeric_limits<float>::infinity();
+  }
+};
+
+RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies) : impl_(std::make_unique<Impl>()) {
+  Impl& w = *impl_;
+  if (proxies.size() != scene.meshes.size()) throw Error("render: one proxy set per scene mesh expected");
+  std::vector<RTCScene> mesh_scenes, proxy_scenes, outside_scenes, inside_scenes;
+  for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
+    mesh_scenes.push_back(w.scene_of({ProxyKind::outside, "mesh", scene.meshes[m].mesh, {}}));
+    proxy_scenes.push_back(proxies[m].stochastic ? w.scene_of(*proxies[m].stochastic) : mesh_scenes.back());
+    outside_scenes.push_back(proxies[m].outside ? w.scene_of(*proxies[m].outside) : mesh_scenes.back());
+    inside_scenes.push_back(proxies[m].inside ? w.scene_of(*proxies[m].inside) : nullptr);
+  }
+  w.camera = w.top_scene();
+  w.proxy = w.top_scene();
+  w.outside = w.top_scene();
+  w.inside = w.top_scene();
+  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    const SceneInstance& instance = scene.instances[i];
+    std::size_t m = 0;
+    while (scene.meshes[m].name != instance.mesh) ++m;
+    const auto id = static_cast<unsigned>(i);
+    w.add_instance(w.camera, mesh_scenes[m], instance.transform, id, kMeshMask);
+    w.add_instance(w.proxy, proxy_scenes[m], instance.transform, id, kMeshMask);
+    w.add_instance(w.outside, outside_scenes[m], instance.transform, id, kMeshMask);
+    if (inside_scenes[m]) w.add_instance(w.inside, inside_scenes[m], instance.transform, id, kMeshMask);
+    w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
+    w.is_exact.push_back(!proxies[m].stochastic.has_value());
+    w.stochastic_kinds.push_back(proxies[m].stochastic ? proxies[m].stochastic->kind : ProxyKind::outside);
+    w.has_outside.push_back(proxies[m].outside.has_value());
+  }
+  // Lights: visible to camera rays only (mask), one geometry after the instances.
+  TriangleMesh lights;
+  for (std::size_t l = 0; l < scene.lights.size(); ++l)
+    for (const auto& t : scene.lights[l].triangles) {
+      const auto base = static_cast<VertexIndex>(lights.positions.size());
+      lights.positions.insert(lights.positions.end(), t.begin(), t.end());
+      lights.triangles.push_back({base, base + 1, base + 2});
+      w.light_of_triangle.push_back(static_cast<int>(l));
+      w.light_normals.push_back((t[1] - t[0]).cross(t[2] - t[0]).normalized());
+    }
+  RTCGeometry geometry = rtcNewGeometry(w.device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), lights.positions.size()));
+  auto* indices = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                      3 * sizeof(std::uint32_t), lights.triangles.size()));
+  w.device.throw_if_failed();
+  for (std::size_t i = 0; i < lights.positions.size(); ++i)
+    for (int a = 0; a < 3; ++a) vertices[3 * i + a] = static_cast<float>(lights.positions[i][a]);
+  for (std::size_t i = 0; i < lights.triangles.size(); ++i)
+    for (int a = 0; a < 3; ++a) indices[3 * i + a] = lights.triangles[i][a];
+  rtcSetGeometryMask(geometry, kLightMask);
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometryByID(w.camera, geometry, static_cast<unsigned>(scene.instances.size()));
+  rtcReleaseGeometry(geometry);
+  for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
+  w.device.throw_if_failed();
+}
+
+RenderWorld::~RenderWorld() = default;
+
+std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Vertex& direction) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rayhit{};
+  rayhit.ray = segment_ray(origin, origin + direction);
+  rayhit.ray.tfar = std::numeric_limits<float>::infinity();
+  rayhit.ray.mask = kMeshMask | kLightMask;
+  rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->camera, &context, &rayhit);
+  if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  SurfaceHit hit;
+  hit.position = origin + static_cast<double>(rayhit.ray.tfar) * direction;
+  Vertex normal(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
+  if (rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+    hit.instance = static_cast<int>(rayhit.hit.instID[0]);
+    normal = impl_->normal_matrices[static_cast<std::size_t>(hit.instance)] * normal;  // Embree gives it in object space
+  } else {
+    hit.light = impl_->light_of_triangle[rayhit.hit.primID];
+    hit.light_front = impl_->light_normals[rayhit.hit.primID].dot(direction) < 0;
+  }
+  normal.normalize();
+  hit.normal = normal.dot(direction) > 0 ? -normal : normal;
+  return hit;
+}
+
+bool RenderWorld::mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+  return impl_->blocked(impl_->camera, from, to, filter);
+}
+bool RenderWorld::proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+  return impl_->blocked(impl_->proxy, from, to, filter);
+}
+bool RenderWorld::outside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+  return impl_->blocked(impl_->outside, from, to, filter);
+}
+bool RenderWorld::inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+  return impl_->blocked(impl_->inside, from, to, filter);
+}
+
+ProxyKind RenderWorld::stochastic_kind(int skip) const {
+  bool all_outside = true, all_inside = true;
+  for (std::size_t i = 0; i < impl_->stochastic_kinds.size(); ++i) {
+    if (static_cast<int>(i) == skip || impl_->is_exact[i]) continue;
+    all_outside = all_outside && impl_->stochastic_kinds[i] == ProxyKind::outside;
+    all_inside = all_inside && impl_->stochastic_kinds[i] == ProxyKind::inside;
+  }
+  return all_outside ? ProxyKind::outside : all_inside ? ProxyKind::inside : ProxyKind::general;
+}
+
+bool RenderWorld::outside_complete(int skip) const {
+  for (std::size_t i = 0; i < impl_->has_outside.size(); ++i)
+    if (static_cast<int>(i) != skip && !impl_->has_outside[i]) return false;
+  return true;
+}
+
+}  // namespace visproxy
