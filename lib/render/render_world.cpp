@@ -50,6 +50,9 @@ struct RenderWorld::Impl {
   RTCScene scene_of(const InstanceProxy& p) {
     RTCScene scene = device.new_scene();
     owned.push_back(scene);
+    // Hits inside instances go through the context filter too: Embree needs the flag on
+    // the instanced scenes as well as on the top scenes.
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
     if (!p.spheres.empty()) {
       sphere_storage.push_back(p.spheres);
       attach_spheres(device, scene, sphere_storage.back());
