@@ -1,6 +1,7 @@
 #include "render/render_world.h"
 
 #include <limits>
+#include <map>
 
 #include "core/errors.h"
 #include "trace/embree_support.h"
@@ -100,31 +101,32 @@ struct RenderWorld::Impl {
 
 RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies) : impl_(std::make_unique<Impl>()) {
   Impl& w = *impl_;
-  if (proxies.size() != scene.meshes.size()) throw Error("render: one proxy set per scene mesh expected");
-  std::vector<RTCScene> mesh_scenes, proxy_scenes, outside_scenes, inside_scenes;
-  for (std::size_t m = 0; m < scene.meshes.size(); ++m) {
-    mesh_scenes.push_back(w.scene_of({ProxyKind::outside, "mesh", scene.meshes[m].mesh, {}}));
-    proxy_scenes.push_back(proxies[m].stochastic ? w.scene_of(*proxies[m].stochastic) : mesh_scenes.back());
-    outside_scenes.push_back(proxies[m].outside ? w.scene_of(*proxies[m].outside) : mesh_scenes.back());
-    inside_scenes.push_back(proxies[m].inside ? w.scene_of(*proxies[m].inside) : nullptr);
-  }
+  if (proxies.size() != scene.instances.size()) throw Error("render: one proxy set per scene instance expected");
+  std::map<std::string, RTCScene> shared;  // "mesh\nspec" -> scene
+  auto scene_for = [&](const std::string& mesh, const std::optional<InstanceProxy>& proxy) -> RTCScene {
+    const std::string key = mesh + "\n" + (proxy ? proxy->spec : std::string("mesh"));
+    if (auto it = shared.find(key); it != shared.end()) return it->second;
+    const TriangleMesh& triangles = scene.mesh(mesh).mesh;
+    RTCScene object = proxy ? w.scene_of(*proxy) : w.scene_of({ProxyKind::outside, "mesh", triangles, {}});
+    shared.emplace(key, object);
+    return object;
+  };
   w.camera = w.top_scene();
   w.proxy = w.top_scene();
   w.outside = w.top_scene();
   w.inside = w.top_scene();
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {
     const SceneInstance& instance = scene.instances[i];
-    std::size_t m = 0;
-    while (scene.meshes[m].name != instance.mesh) ++m;
+    const MeshProxies& p = proxies[i];
     const auto id = static_cast<unsigned>(i);
-    w.add_instance(w.camera, mesh_scenes[m], instance.transform, id, kMeshMask);
-    w.add_instance(w.proxy, proxy_scenes[m], instance.transform, id, kMeshMask);
-    w.add_instance(w.outside, outside_scenes[m], instance.transform, id, kMeshMask);
-    if (inside_scenes[m]) w.add_instance(w.inside, inside_scenes[m], instance.transform, id, kMeshMask);
+    w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, kMeshMask);
+    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, kMeshMask);
+    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, kMeshMask);
+    if (p.inside) w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, kMeshMask);
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
-    w.is_exact.push_back(!proxies[m].stochastic.has_value());
-    w.stochastic_kinds.push_back(proxies[m].stochastic ? proxies[m].stochastic->kind : ProxyKind::outside);
-    w.has_outside.push_back(proxies[m].outside.has_value());
+    w.is_exact.push_back(!p.stochastic.has_value());
+    w.stochastic_kinds.push_back(p.stochastic ? p.stochastic->kind : ProxyKind::outside);
+    w.has_outside.push_back(p.outside.has_value());
   }
   // Lights: visible to camera rays only (mask), one geometry after the instances.
   TriangleMesh lights;

@@ -21,8 +21,9 @@ struct InstanceProxy {
   std::vector<Sphere> spheres;  ///< sphere proxies (mesh empty)
 };
 
-/// Proxies of each scene mesh by role. Any may be missing: a mesh without a stochastic
-/// proxy stands in for itself; bounds without an outside (inside) proxy prove nothing.
+/// The proxies of one instance by role (in its mesh's frame). Any may be missing: an
+/// instance without a stochastic proxy stands in for itself; without an outside proxy its
+/// mesh is its own outside proxy; without an inside proxy nothing is proved occluded.
 struct MeshProxies {
   std::optional<InstanceProxy> stochastic;  ///< the proxy `--visibility stochastic` uses
   std::optional<InstanceProxy> outside;     ///< `--visibility bounds`: certainly-unoccluded test
@@ -45,7 +46,8 @@ struct InstanceFilter {
 
 class RenderWorld {
  public:
-  /// `proxies` has one entry per scene mesh (same order), possibly empty.
+  /// `proxies` has one entry per scene instance (same order), possibly empty. Proxies with
+  /// the same spec on instances of the same mesh share one BVH.
   RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies);
   ~RenderWorld();
   RenderWorld(const RenderWorld&) = delete;

@@ -55,7 +55,7 @@ double lambert_irradiance(const Vertex& x, const Vertex& n, const std::vector<Ve
 // irradiance changes by far less than the noise across it).
 TEST(Renderer, PlaneUnderParallelogramLightMatchesLambertsFormula) {
   const Scene scene = plane_under_light(0.3);
-  const RenderWorld world(scene, std::vector<MeshProxies>(1));
+  const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
   constexpr int runs = 8;
   std::vector<Image> images;
   for (int run = 0; run < runs; ++run)
@@ -83,7 +83,7 @@ TEST(Renderer, PlaneUnderParallelogramLightMatchesLambertsFormula) {
 
 TEST(Renderer, SameSeedSameImageWhateverTheThreads) {
   const Scene scene = plane_under_light(0.0);
-  const RenderWorld world(scene, std::vector<MeshProxies>(1));
+  const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
   const RenderResult a = render(scene, world, {.spp = 4, .seed = 7});
   RenderResult b;
   {

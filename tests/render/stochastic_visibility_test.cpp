@@ -45,7 +45,7 @@ TwoInstances scene_with(const InstanceProxy& proxy) {
   AreaLight light;
   light.triangles = {{Vertex(-1, -1, 5), Vertex(-1, 1, 5), Vertex(1, 1, 5)}};
   s.scene.lights.push_back(light);
-  s.proxies.resize(2);
+  s.proxies.resize(2);  // per instance: the floor has none
   s.proxies[1].stochastic = proxy;
   return s;
 }
