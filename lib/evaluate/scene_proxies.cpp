@@ -28,6 +28,16 @@ std::string content_hash(const TriangleMesh& mesh) {
 }
 
 InstanceProxy load_or_build(const SceneMesh& mesh, const ProxySpec& spec, const SceneProxyOptions& options) {
+  // A proxy folder the scene names comes first.
+  if (!mesh.proxy_folder.empty()) {
+    const nlohmann::json manifest = read_manifest(mesh.proxy_folder);
+    for (const nlohmann::json& entry : manifest.at("proxies"))
+      if (entry.at("name") == spec.name()) {
+        if (options.on_proxy) options.on_proxy(mesh.name, spec.text, true);
+        const ProxyGeometry geometry = read_proxy_geometry(mesh.proxy_folder, entry);
+        return {entry_kind(entry), spec.text, geometry.mesh, geometry.spheres};
+      }
+  }
   const std::filesystem::path folder =
       options.cache / (mesh.name + "-" + content_hash(mesh.mesh)) / spec.name();
   const bool cached = std::filesystem::exists(folder / "manifest.json");

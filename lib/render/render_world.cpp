@@ -9,8 +9,12 @@
 namespace visproxy {
 namespace {
 
-constexpr unsigned kMeshMask = 1u;
-constexpr unsigned kLightMask = 2u;
+// Instance i carries mask bit i % 31; lights carry bit 31. A query that skips or keeps one
+// instance clears or keeps its bit, so Embree never visits what it must ignore; only when
+// other instances share that bit (more than 31 instances) does the filter function decide.
+constexpr unsigned kLightMask = 1u << 31;
+constexpr unsigned kAllInstances = kLightMask - 1;
+unsigned instance_mask(std::size_t instance) { return 1u << (instance % 31); }
 
 // An intersect context that carries which instances a query sees; the scenes' context
 // filter function reads it (Embree passes the context to every hit it considers).
@@ -43,6 +47,8 @@ struct RenderWorld::Impl {
   std::vector<ProxyKind> stochastic_kinds;  // per instance; outside for exact (mesh itself)
   std::vector<bool> has_outside;
   std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
+  std::size_t instance_count = 0;
+  bool has_inside = false;
 
   ~Impl() {
     for (RTCScene scene : owned) rtcReleaseScene(scene);
@@ -90,10 +96,13 @@ struct RenderWorld::Impl {
   bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
     FilterContext context;
     rtcInitIntersectContext(&context.context);
-    context.context.filter = instance_filter;
     context.filter = filter;
     RTCRay ray = segment_ray(from, to);
-    ray.mask = kMeshMask;
+    ray.mask = kAllInstances;
+    if (filter.only >= 0) ray.mask = instance_mask(static_cast<std::size_t>(filter.only));
+    if (filter.skip >= 0) ray.mask &= ~instance_mask(static_cast<std::size_t>(filter.skip));
+    const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
+    context.context.filter = shared_bit ? instance_filter : nullptr;
     rtcOccluded1(scene, &context.context, &ray);
     return ray.tfar == -std::numeric_limits<float>::infinity();
   }
@@ -111,6 +120,9 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     shared.emplace(key, object);
     return object;
   };
+  w.instance_count = scene.instances.size();
+  w.has_inside = false;
+  for (const MeshProxies& p : proxies) w.has_inside = w.has_inside || p.inside.has_value();
   w.camera = w.top_scene();
   w.proxy = w.top_scene();
   w.outside = w.top_scene();
@@ -119,10 +131,11 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const SceneInstance& instance = scene.instances[i];
     const MeshProxies& p = proxies[i];
     const auto id = static_cast<unsigned>(i);
-    w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, kMeshMask);
-    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, kMeshMask);
-    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, kMeshMask);
-    if (p.inside) w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, kMeshMask);
+    const unsigned mask = instance_mask(i);
+    w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, mask);
+    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, mask);
+    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, mask);
+    if (p.inside) w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, mask);
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
     w.is_exact.push_back(!p.stochastic.has_value());
     w.stochastic_kinds.push_back(p.stochastic ? p.stochastic->kind : ProxyKind::outside);
@@ -164,7 +177,7 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
   RTCRayHit rayhit{};
   rayhit.ray = segment_ray(origin, origin + direction);
   rayhit.ray.tfar = std::numeric_limits<float>::infinity();
-  rayhit.ray.mask = kMeshMask | kLightMask;
+  rayhit.ray.mask = kAllInstances | kLightMask;
   rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rayhit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(impl_->camera, &context, &rayhit);
@@ -194,7 +207,7 @@ bool RenderWorld::outside_blocks(const Vertex& from, const Vertex& to, InstanceF
   return impl_->blocked(impl_->outside, from, to, filter);
 }
 bool RenderWorld::inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
-  return impl_->blocked(impl_->inside, from, to, filter);
+  return impl_->has_inside && impl_->blocked(impl_->inside, from, to, filter);
 }
 
 ProxyKind RenderWorld::stochastic_kind(int skip) const {
@@ -206,6 +219,8 @@ ProxyKind RenderWorld::stochastic_kind(int skip) const {
   }
   return all_outside ? ProxyKind::outside : all_inside ? ProxyKind::inside : ProxyKind::general;
 }
+
+bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
 
 bool RenderWorld::outside_complete(int skip) const {
   for (std::size_t i = 0; i < impl_->has_outside.size(); ++i)

@@ -69,6 +69,8 @@ class RenderWorld {
   /// The kind of the union of every instance's stochastic proxy except `skip`'s: outside
   /// (inside) when each is outside (inside) or exact, general otherwise.
   ProxyKind stochastic_kind(int skip) const;
+  /// Whether any instance has an inside proxy (else inside_blocks is always false).
+  bool has_inside_proxies() const;
   /// Whether every instance other than `skip` has an outside proxy.
   bool outside_complete(int skip) const;
 

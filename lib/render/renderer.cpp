@@ -230,25 +230,27 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           visibility = stochastic_visibility(world, x, y.position, own, probabilities, random.uniform(), options.split, stats);
           break;
         case VisibilityMode::bounds: {
-          // The own instance exactly; the rest: free if it misses every outside proxy,
-          // blocked if it meets an inside proxy, else traced.
-          ++stats.exact_tests;
-          if (world.mesh_blocks(x, y.position, {.skip = -1, .only = own})) break;
+          // The rest of the scene first: free if the segment misses every other instance's
+          // outside proxy (then only the own instance is traced), blocked if it meets an
+          // inside proxy; otherwise one exact query over everything.
           const InstanceFilter rest{.skip = own, .only = -1};
           ++stats.proxy_tests;
           if (!world.outside_blocks(x, y.position, rest)) {
             ++stats.bounds_unoccluded;
-            visibility = 1;
+            ++stats.exact_tests;
+            visibility = world.mesh_blocks(x, y.position, {.skip = -1, .only = own}) ? 0 : 1;
             break;
           }
-          ++stats.proxy_tests;
-          if (world.inside_blocks(x, y.position, rest)) {
-            ++stats.bounds_occluded;
-            break;
+          if (world.has_inside_proxies()) {
+            ++stats.proxy_tests;
+            if (world.inside_blocks(x, y.position, rest)) {
+              ++stats.bounds_occluded;
+              break;
+            }
           }
           ++stats.bounds_traced;
           ++stats.exact_tests;
-          visibility = world.mesh_blocks(x, y.position, rest) ? 0 : 1;
+          visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
           break;
         }
       }

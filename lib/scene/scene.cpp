@@ -157,7 +157,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   if (!meshes.is_object() || meshes.empty()) p.fail("meshes", "expected an object of named meshes");
   for (const auto& [name, value] : meshes.items()) {
     const std::string where = "mesh \"" + name + "\"";
-    SceneMesh mesh{name, {}, {}};
+    SceneMesh mesh{name, {}, {}, {}};
+    if (value.contains("proxy_folder")) {
+      if (!value["proxy_folder"].is_string()) p.fail(where, "\"proxy_folder\" must be a string");
+      mesh.proxy_folder = p.mesh_path(value["proxy_folder"].get<std::string>());
+    }
     if (value.contains("file")) {
       if (!value["file"].is_string()) p.fail(where, "\"file\" must be a string");
       mesh.file = p.mesh_path(value["file"].get<std::string>());

@@ -21,6 +21,9 @@ struct SceneMesh {
   std::string name;
   std::filesystem::path file;  ///< resolved path; empty for meshes given inline
   TriangleMesh mesh;
+  /// A `visproxy build` folder holding proxies of this mesh ("proxy_folder" in the file,
+  /// relative to the scene); proxies found there are used instead of built. May be empty.
+  std::filesystem::path proxy_folder;
 };
 
 struct SceneInstance {

@@ -23,7 +23,7 @@ TriangleMesh quad(const Vertex& corner, const Vertex& u, const Vertex& v) {
 // straight above looking down with a narrow field of view.
 Scene plane_under_light(double light_x) {
   Scene scene;
-  scene.meshes.push_back({"plane", {}, quad({-5, -5, 0}, {10, 0, 0}, {0, 10, 0})});
+  scene.meshes.push_back({"plane", {}, quad({-5, -5, 0}, {10, 0, 0}, {0, 10, 0}), {}});
   scene.instances.push_back({"plane", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
   AreaLight light;
   light.radiance = Color(2.0, 1.0, 0.5);
