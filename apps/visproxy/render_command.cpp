@@ -34,6 +34,7 @@ struct RenderCommandOptions {
   std::filesystem::path cache;
   double exposure = 1.0;
   bool maps = false;
+  int width = 0, height = 0;
 };
 
 std::filesystem::path beside(const std::filesystem::path& output, const std::string& suffix) {
@@ -81,13 +82,17 @@ void add_render_command(CLI::App& app, int& exit_code) {
   command->add_option("--proxy", o->proxy, "stochastic: use this spec for every instance that names proxies (default: its first)");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: $XDG_CACHE_HOME/visproxy or ~/.cache/visproxy]");
   command->add_option("--exposure", o->exposure, "Scale applied before sRGB encoding of the PNG [default: 1]")->check(CLI::PositiveNumber);
+  command->add_option("--width", o->width, "Override the camera's image width")->check(CLI::Range(1, 16384));
+  command->add_option("--height", o->height, "Override the camera's image height")->check(CLI::Range(1, 16384));
   command->add_flag("--maps", o->maps, "Also write OUT.cost.png (segment queries per camera sample) and, for stochastic, OUT.p1.png");
 
   command->callback([o, &exit_code] {
     if (o->output.extension() != ".pfm")
       throw InvalidInputError(o->output, "unsupported image format (use .pfm; a PNG is written beside it)");
     const bool terminal = ::isatty(STDERR_FILENO);
-    const Scene scene = load_scene(o->scene);
+    Scene scene = load_scene(o->scene);
+    if (o->width > 0) scene.camera.width = o->width;
+    if (o->height > 0) scene.camera.height = o->height;
     SceneProxyOptions proxy_options{.cache = o->cache.empty() ? default_proxy_cache() : o->cache,
                                     .stochastic_spec = std::nullopt,
                                     .seed = o->seed,
