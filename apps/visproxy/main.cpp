@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   add_report_command(app, exit_code);
   add_render_command(app, exit_code);
   add_generate_command(app, exit_code);
+  add_compare_command(app, exit_code);
 
   try {
     app.parse(argc, argv);
