@@ -34,6 +34,7 @@ struct RenderCommandOptions {
   std::filesystem::path cache;
   double exposure = 1.0;
   bool maps = false;
+  bool count = false;
   int width = 0, height = 0;
 };
 
@@ -84,7 +85,11 @@ void add_render_command(CLI::App& app, int& exit_code) {
   command->add_option("--exposure", o->exposure, "Scale applied before sRGB encoding of the PNG [default: 1]")->check(CLI::PositiveNumber);
   command->add_option("--width", o->width, "Override the camera's image width")->check(CLI::Range(1, 16384));
   command->add_option("--height", o->height, "Override the camera's image height")->check(CLI::Range(1, 16384));
-  command->add_flag("--maps", o->maps, "Also write OUT.cost.png (segment queries per camera sample) and, for stochastic, OUT.p1.png");
+  command->add_flag("--count", o->count,
+                    "Trace shadow rays with visproxy's own traversal of Embree-built BVHs and count traversal steps and "
+                    "primitive tests (deterministic cost; slower than Embree's traversal)");
+  command->add_flag("--maps", o->maps, "Also write OUT.cost.png (per camera sample: traversal steps + primitive tests with --count, else segment queries; "
+                    "white = the most) and, for stochastic, OUT.p1.png (p1 of the estimator, white = 1)");
 
   command->callback([o, &exit_code] {
     if (o->output.extension() != ".pfm")
@@ -105,7 +110,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
     const std::vector<MeshProxies> proxies = o->visibility == VisibilityMode::exact
                                                  ? std::vector<MeshProxies>(scene.instances.size())
                                                  : prepare_scene_proxies(scene, proxy_options);
-    const RenderWorld world(scene, proxies);
+    const RenderWorld world(scene, proxies, o->count);
     RenderOptions options{.visibility = o->visibility,
                           .probabilities = o->probabilities,
                           .cost_heuristic = o->cost_heuristic,

@@ -34,10 +34,37 @@ void instance_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+thread_local TraversalCounts g_thread_counts;
+
+// One instance of an object BVH for counted queries.
+struct CountedInstance {
+  const CountingBvh* object = nullptr;
+  Eigen::Affine3d to_object;
+  BoundingBox world;
+};
+
+bool segment_meets_box(const Vertex& from, const Vertex& to, const BoundingBox& box) {
+  double t0 = 0, t1 = 1;
+  const Vertex d = to - from;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0) {
+      if (from[a] < box.min[a] || from[a] > box.max[a]) return false;
+      continue;
+    }
+    double near = (box.min[a] - from[a]) / d[a], far = (box.max[a] - from[a]) / d[a];
+    if (near > far) std::swap(near, far);
+    t0 = std::max(t0, near), t1 = std::min(t1, far);
+  }
+  return t0 <= t1;
+}
+
 }  // namespace
 
 struct RenderWorld::Impl {
   EmbreeDevice device;
+  bool counting = false;
+  std::map<RTCScene, std::unique_ptr<CountingBvh>> counting_bvhs;  // per object scene
+  std::map<RTCScene, std::vector<std::optional<CountedInstance>>> counted;  // per top scene, per instance
   std::vector<RTCScene> owned;  // released at the end
   std::vector<std::vector<Sphere>> sphere_storage;
   RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
@@ -56,6 +83,9 @@ struct RenderWorld::Impl {
 
   RTCScene scene_of(const InstanceProxy& p) {
     RTCScene scene = device.new_scene();
+    if (counting)
+      counting_bvhs.emplace(scene, p.spheres.empty() ? std::make_unique<CountingBvh>(p.mesh)
+                                                     : std::make_unique<CountingBvh>(std::span<const Sphere>(p.spheres)));
     owned.push_back(scene);
     // Hits inside instances go through the context filter too: Embree needs the flag on
     // the instanced scenes as well as on the top scenes.
@@ -79,6 +109,18 @@ struct RenderWorld::Impl {
   }
 
   void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask) {
+    if (counting) {
+      auto& list = counted[top];
+      list.resize(std::max<std::size_t>(list.size(), id + 1));
+      const CountingBvh* bvh = counting_bvhs.at(object).get();
+      CountedInstance instance{bvh, transform.inverse(), {}};
+      const BoundingBox& local = bvh->bounds();
+      if (!local.empty())
+        for (int corner = 0; corner < 8; ++corner)
+          instance.world.extend(transform * Vertex(corner & 1 ? local.max.x() : local.min.x(), corner & 2 ? local.max.y() : local.min.y(),
+                                                   corner & 4 ? local.max.z() : local.min.z()));
+      list[id] = instance;
+    }
     RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
     device.throw_if_failed();
     rtcSetGeometryInstancedScene(geometry, object);
@@ -94,6 +136,19 @@ struct RenderWorld::Impl {
   }
 
   bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+    if (counting) {
+      const auto it = counted.find(scene);
+      if (it == counted.end()) return false;
+      TraversalCounts& counts = g_thread_counts;
+      for (std::size_t i = 0; i < it->second.size(); ++i) {
+        const auto& instance = it->second[i];
+        if (!instance || static_cast<int>(i) == filter.skip || (filter.only >= 0 && static_cast<int>(i) != filter.only)) continue;
+        ++counts.nodes;
+        if (instance->world.empty() || !segment_meets_box(from, to, instance->world)) continue;
+        if (instance->object->segment_blocked(instance->to_object * from, instance->to_object * to, counts)) return true;
+      }
+      return false;
+    }
     FilterContext context;
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
@@ -108,8 +163,10 @@ struct RenderWorld::Impl {
   }
 };
 
-RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies) : impl_(std::make_unique<Impl>()) {
+RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, bool counting)
+    : impl_(std::make_unique<Impl>()) {
   Impl& w = *impl_;
+  w.counting = counting;
   if (proxies.size() != scene.instances.size()) throw Error("render: one proxy set per scene instance expected");
   std::map<std::string, RTCScene> shared;  // "mesh\nspec" -> scene
   auto scene_for = [&](const std::string& mesh, const std::optional<InstanceProxy>& proxy) -> RTCScene {
@@ -219,6 +276,9 @@ ProxyKind RenderWorld::stochastic_kind(int skip) const {
   }
   return all_outside ? ProxyKind::outside : all_inside ? ProxyKind::inside : ProxyKind::general;
 }
+
+TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
+bool RenderWorld::counting() const { return impl_->counting; }
 
 bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
 

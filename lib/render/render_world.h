@@ -10,6 +10,7 @@
 #include "core/proxy_kind.h"
 #include "mesh/sphere_set.h"
 #include "scene/scene.h"
+#include "trace/counting_bvh.h"
 
 namespace visproxy {
 
@@ -47,8 +48,15 @@ struct InstanceFilter {
 class RenderWorld {
  public:
   /// `proxies` has one entry per scene instance (same order), possibly empty. Proxies with
-  /// the same spec on instances of the same mesh share one BVH.
-  RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies);
+  /// the same spec on instances of the same mesh share one BVH. With `counting`, shadow
+  /// queries run through CountingBvh (our traversal of Embree-built BVHs, double-precision
+  /// primitive tests) and add their work to thread_counts(); camera rays still use Embree.
+  RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, bool counting = false);
+
+  /// The work of this thread's shadow queries so far (counting worlds only): one node per
+  /// instance whose world box is tested, plus the nodes and primitives of its BVH.
+  static TraversalCounts& thread_counts();
+  bool counting() const;
   ~RenderWorld();
   RenderWorld(const RenderWorld&) = delete;
   RenderWorld& operator=(const RenderWorld&) = delete;

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 namespace visproxy {
 namespace {
@@ -33,6 +34,19 @@ class PixelRandom {
 
  private:
   std::uint64_t state_;
+};
+
+// Runs a callable when the scope ends, on every return path.
+template <typename F>
+class ScopeExit {
+ public:
+  explicit ScopeExit(F f) : f_(std::move(f)) {}
+  ~ScopeExit() { f_(); }
+  ScopeExit(const ScopeExit&) = delete;
+  ScopeExit& operator=(const ScopeExit&) = delete;
+
+ private:
+  F f_;
 };
 
 struct LightSample {
@@ -116,7 +130,12 @@ nlohmann::json RenderStats::to_json() const {
           {"exact_tests_per_shadow_ray", static_cast<double>(exact_tests) / rays},
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
           {"stochastic_terms", {{"a_proxy_only", term_counts[0]}, {"b_mesh_if_proxy_hit", term_counts[1]}, {"c_mesh_if_proxy_missed", term_counts[2]}}},
-          {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}}}};
+          {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}}},
+          {"counted", counted},
+          {"traversal_steps", counted ? nlohmann::json(traversal_steps) : nlohmann::json(nullptr)},
+          {"primitive_tests", counted ? nlohmann::json(primitive_tests) : nlohmann::json(nullptr)},
+          {"traversal_steps_per_shadow_ray", counted ? nlohmann::json(static_cast<double>(traversal_steps) / rays) : nlohmann::json(nullptr)},
+          {"primitive_tests_per_shadow_ray", counted ? nlohmann::json(static_cast<double>(primitive_tests) / rays) : nlohmann::json(nullptr)}};
 }
 
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
@@ -157,6 +176,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const double offset = 1e-6 * scene_scale(scene);
   const LightSampler lights(scene);
   const bool stochastic = options.visibility == VisibilityMode::stochastic;
+  const bool counting = world.counting();
 
   std::vector<ProxyKind> kinds;  // per instance: the estimator's form for the rest of the scene
   for (std::size_t i = 0; i < scene.instances.size(); ++i)
@@ -171,6 +191,16 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     PixelRandom random(options.seed, pixel, static_cast<std::uint64_t>(pass));
     RenderStats& stats = thread_stats.local();
     const std::uint64_t tests_before = stats.exact_tests + stats.proxy_tests;
+    const TraversalCounts counts_before = RenderWorld::thread_counts();
+    // Whatever path the sample takes, its work lands in the stats and the cost map.
+    const ScopeExit account([&] {
+      const TraversalCounts& now = RenderWorld::thread_counts();
+      const std::uint64_t steps = now.nodes - counts_before.nodes, primitives = now.primitives - counts_before.primitives;
+      stats.traversal_steps += steps;
+      stats.primitive_tests += primitives;
+      tests[pixel] += counting ? static_cast<double>(steps + primitives)
+                               : static_cast<double>(stats.exact_tests + stats.proxy_tests - tests_before);
+    });
     ++stats.camera_samples;
     const double sx = (2 * (px + random.uniform()) / width - 1) * tan_half * aspect;
     const double sy = (1 - 2 * (py + random.uniform()) / height) * tan_half;
@@ -257,7 +287,6 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       if (visibility != 0) radiance += (visibility * cos_x * cos_y / distance2 * lights.total_area()) * y.radiance;
     }
     sum[pixel] += brdf.cwiseProduct(radiance) / options.shadow_rays;
-    tests[pixel] += static_cast<double>(stats.exact_tests + stats.proxy_tests - tests_before);
   };
 
   constexpr int tile = 16;
@@ -294,8 +323,10 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     r.exact_tests += s.exact_tests, r.proxy_tests += s.proxy_tests, r.probe_rays += s.probe_rays;
     for (int i = 0; i < 3; ++i) r.term_counts[i] += s.term_counts[i];
     r.bounds_unoccluded += s.bounds_unoccluded, r.bounds_occluded += s.bounds_occluded, r.bounds_traced += s.bounds_traced;
+    r.traversal_steps += s.traversal_steps, r.primitive_tests += s.primitive_tests;
   }
   result.stats.passes = passes;
+  result.stats.counted = counting;
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

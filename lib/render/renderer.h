@@ -42,13 +42,16 @@ struct RenderStats {
   std::uint64_t probe_rays = 0;   ///< adaptive probe segments (each tests proxy and mesh)
   std::uint64_t term_counts[3] = {0, 0, 0};  ///< stochastic: times terms (a), (b), (c) were chosen
   std::uint64_t bounds_unoccluded = 0, bounds_occluded = 0, bounds_traced = 0;
+  bool counted = false;               ///< the world was a counting one: the two below are set
+  std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
+  std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries
   nlohmann::json to_json() const;
 };
 
 struct RenderResult {
   Image image;     ///< linear radiance
   Image p1_map;    ///< per pixel mean p1 of the stochastic estimator (grey), else empty
-  Image cost_map;  ///< per pixel segment queries per camera sample (grey)
+  Image cost_map;  ///< per pixel per camera sample: traversal steps + primitive tests when counted, else segment queries
   RenderStats stats;
 };
 

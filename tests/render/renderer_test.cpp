@@ -97,5 +97,41 @@ TEST(Renderer, SameSeedSameImageWhateverTheThreads) {
   EXPECT_EQ(a.stats.camera_samples, 4u * 25u);
 }
 
+// Counted traversal: deterministic work figures, and the same answers as Embree's
+// traversal up to float rounding of grazing rays.
+TEST(Renderer, CountedRenderIsDeterministicAndAgreesWithEmbree) {
+  Scene scene = plane_under_light(0.0);
+  // A floating box between the plane and the light casts a shadow.
+  TriangleMesh box;
+  for (int c = 0; c < 8; ++c) box.positions.emplace_back(c & 1 ? 0.1 : -0.1, c & 2 ? 0.1 : -0.1, c & 4 ? 0.6 : 0.4);
+  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  scene.meshes.push_back({"box", {}, box, {}});
+  scene.instances.push_back({"box", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.camera.from = {0, 0.2, 3};
+  scene.camera.fov_degrees = 60;
+  scene.camera.width = scene.camera.height = 24;
+  const std::vector<MeshProxies> none(scene.instances.size());
+  const RenderWorld embree(scene, none), counted(scene, none, true);
+  const RenderOptions options{.spp = 4, .shadow_rays = 2, .seed = 3};
+  const RenderResult a = render(scene, embree, options);
+  const RenderResult b = render(scene, counted, options);
+  const RenderResult c = render(scene, counted, options);
+  EXPECT_FALSE(a.stats.counted);
+  ASSERT_TRUE(b.stats.counted);
+  EXPECT_GT(b.stats.traversal_steps, b.stats.shadow_rays);
+  EXPECT_GT(b.stats.primitive_tests, 0u);
+  EXPECT_EQ(b.stats.traversal_steps, c.stats.traversal_steps);
+  EXPECT_EQ(b.stats.primitive_tests, c.stats.primitive_tests);
+  EXPECT_EQ(b.image.pixels, c.image.pixels);
+  std::size_t different = 0, shadowed = 0;
+  for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
+    different += a.image.pixels[i] != b.image.pixels[i];
+    shadowed += a.image.pixels[i].x() < 0.5 * a.image.pixels[0].x();
+  }
+  EXPECT_GT(shadowed, 0u);                            // the box does cast a shadow
+  EXPECT_LE(different, a.image.pixels.size() / 100);  // grazing rays only
+}
+
 }  // namespace
 }  // namespace visproxy
