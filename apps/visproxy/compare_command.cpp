@@ -4,7 +4,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <cmath>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,7 @@ struct CompareOptions {
   std::uint64_t seed = 1;
   int width = 0, height = 0;
   int convergence_points = 4;
+  bool no_count = false;
 };
 
 struct Mode {
@@ -86,6 +89,9 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   command->add_option("--convergence-points", o->convergence_points,
                       "Time budgets per mode for the MSE-against-time curve, halving from --seconds [default: 4]")
       ->check(CLI::Range(1, 12));
+  command->add_flag("--no-count", o->no_count,
+                    "Skip the counted re-render of each mode (same samples and seed, visproxy's own BVH traversal) that "
+                    "gives the table's traversal steps and primitive tests");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: as for render]");
   command->add_option("--width", o->width, "Override the camera's image width")->check(CLI::Range(1, 16384));
   command->add_option("--height", o->height, "Override the camera's image height")->check(CLI::Range(1, 16384));
@@ -106,6 +112,8 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                   if (!cached) std::cerr << "visproxy compare: building " << spec << " of " << mesh << "\n";
                 }});
     const RenderWorld world(scene, proxies);
+    std::unique_ptr<RenderWorld> counting;
+    if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, true);
 
     Image reference;
     std::string reference_note;
@@ -137,9 +145,11 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                      std::to_string(scene.camera.height) + " pixels, " + std::to_string(o->shadow_rays) +
                      " shadow ray(s) per camera sample, seed " + std::to_string(o->seed) + ", equal time " +
                      format_number(o->seconds) + " s per mode; " + reference_note + ".\n\n";
-    md += "| mode | time (s) | samples per pixel | shadow rays per pixel | exact tests per pixel | proxy tests per pixel | MSE | efficiency 1/(MSE x s) |\n";
-    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-    std::string csv = "mode,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,mse,efficiency\n";
+    md += "| mode | time (s) | samples per pixel | shadow rays per pixel | exact tests per pixel | proxy tests per pixel | "
+          "traversal steps per pixel | primitive tests per pixel | MSE | efficiency 1/(MSE x s) |\n";
+    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    std::string csv = "mode,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,"
+                      "traversal_steps_per_pixel,primitive_tests_per_pixel,mse,efficiency\n";
     std::string convergence = "mode,seconds_budget,seconds,samples_per_pixel,mse\n";
     std::vector<PlotSeries> curves;
     for (const Mode& mode : modes(*o)) {
@@ -161,19 +171,32 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         write_png(folder / (file_stem(mode.name) + ".png"), result.image);
         const RenderStats& s = result.stats;
         const double efficiency = mse > 0 ? 1.0 / (mse * s.seconds) : 0.0;
-        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.4g | %.4g |\n", mode.name.c_str(), s.seconds,
-                      s.passes, static_cast<double>(s.shadow_rays) / pixels, static_cast<double>(s.exact_tests) / pixels,
-                      static_cast<double>(s.proxy_tests) / pixels, mse, efficiency);
+        // The same samples again through the counting traversal: deterministic work figures.
+        double steps = std::nan(""), primitives = std::nan("");
+        if (counting) {
+          RenderOptions counted = mode.options;
+          counted.spp = s.passes;
+          counted.seconds = 0;
+          if (terminal) std::cerr << "visproxy compare: " << mode.name << ", counting " << s.passes << " spp\n";
+          const RenderResult c = render(scene, *counting, counted);
+          steps = static_cast<double>(c.stats.traversal_steps) / pixels;
+          primitives = static_cast<double>(c.stats.primitive_tests) / pixels;
+        }
+        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.4g | %.4g |\n", mode.name.c_str(),
+                      s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, static_cast<double>(s.exact_tests) / pixels,
+                      static_cast<double>(s.proxy_tests) / pixels, steps, primitives, mse, efficiency);
         md += line;
-        std::snprintf(line, sizeof line, "%s,%.6g,%d,%.6g,%.6g,%.6g,%.10g,%.10g\n", mode.name.c_str(), s.seconds, s.passes,
+        std::snprintf(line, sizeof line, "%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g\n", mode.name.c_str(), s.seconds, s.passes,
                       static_cast<double>(s.shadow_rays) / pixels, static_cast<double>(s.exact_tests) / pixels,
-                      static_cast<double>(s.proxy_tests) / pixels, mse, efficiency);
+                      static_cast<double>(s.proxy_tests) / pixels, steps, primitives, mse, efficiency);
         csv += line;
       }
       curves.push_back(std::move(curve));
     }
     md += "\nMSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance). "
-          "Exact and proxy tests: segment queries against meshes and against proxies. Images: MODE.pfm / MODE.png; "
+          "Exact and proxy tests: segment queries against meshes and against proxies; traversal steps and primitive tests: "
+          "BVH nodes visited and triangles or balls tested by those queries, counted by re-rendering the same samples "
+          "with visproxy's own traversal (nan with --no-count). Images: MODE.pfm / MODE.png; "
           "MSE against time: convergence.csv, convergence.svg.\n";
     write_file_atomically(folder / "table.md", md);
     write_file_atomically(folder / "table.csv", csv);
