@@ -208,20 +208,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       w.light_of_triangle.push_back(static_cast<int>(l));
       w.light_normals.push_back((t[1] - t[0]).cross(t[2] - t[0]).normalized());
     }
-  RTCGeometry geometry = rtcNewGeometry(w.device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), lights.positions.size()));
-  auto* indices = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                      3 * sizeof(std::uint32_t), lights.triangles.size()));
-  w.device.throw_if_failed();
-  for (std::size_t i = 0; i < lights.positions.size(); ++i)
-    for (int a = 0; a < 3; ++a) vertices[3 * i + a] = static_cast<float>(lights.positions[i][a]);
-  for (std::size_t i = 0; i < lights.triangles.size(); ++i)
-    for (int a = 0; a < 3; ++a) indices[3 * i + a] = lights.triangles[i][a];
-  rtcSetGeometryMask(geometry, kLightMask);
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometryByID(w.camera, geometry, static_cast<unsigned>(scene.instances.size()));
-  rtcReleaseGeometry(geometry);
+  if (!lights.triangles.empty()) {
+    const unsigned id = attach_triangles(w.device, w.camera, lights, kLightMask);
+    if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
+  }
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
   w.device.throw_if_failed();
 }

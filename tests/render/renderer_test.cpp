@@ -1,4 +1,5 @@
 #include "render/renderer.h"
+#include "render/render_test_scenes.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -12,12 +13,8 @@
 namespace visproxy {
 namespace {
 
-TriangleMesh quad(const Vertex& corner, const Vertex& u, const Vertex& v) {
-  TriangleMesh mesh;
-  mesh.positions = {corner, corner + u, corner + u + v, corner + v};
-  mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
-  return mesh;
-}
+using testing::box;
+using testing::quad;
 
 // A diffuse plane z = 0 (albedo 0.5) under a 1 x 1 light at height 1 facing down, camera
 // straight above looking down with a narrow field of view.
@@ -102,11 +99,7 @@ TEST(Renderer, SameSeedSameImageWhateverTheThreads) {
 TEST(Renderer, CountedRenderIsDeterministicAndAgreesWithEmbree) {
   Scene scene = plane_under_light(0.0);
   // A floating box between the plane and the light casts a shadow.
-  TriangleMesh box;
-  for (int c = 0; c < 8; ++c) box.positions.emplace_back(c & 1 ? 0.1 : -0.1, c & 2 ? 0.1 : -0.1, c & 4 ? 0.6 : 0.4);
-  box.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
-                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-  scene.meshes.push_back({"box", {}, box, {}});
+  scene.meshes.push_back({"box", {}, box({-0.1, -0.1, 0.4}, {0.1, 0.1, 0.6}), {}});
   scene.instances.push_back({"box", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
   scene.camera.from = {0, 0.2, 3};
   scene.camera.fov_degrees = 60;
