@@ -16,6 +16,33 @@ constexpr unsigned kLightMask = 1u << 31;
 constexpr unsigned kAllInstances = kLightMask - 1;
 unsigned instance_mask(std::size_t instance) { return 1u << (instance % 31); }
 
+// For each triangle of a small mesh: whether every vertex lies behind its plane (against
+// the normal of its winding), and whether every vertex lies in front of it.
+struct TangentSides {
+  std::vector<std::uint8_t> behind, in_front;
+};
+
+TangentSides tangent_sides(const TriangleMesh& mesh) {
+  TangentSides sides;
+  if (mesh.triangles.size() > 4096) return sides;
+  const std::vector<Vertex> points = used_positions(mesh);
+  const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
+  for (const Triangle& t : mesh.triangles) {
+    const Vertex& p0 = mesh.positions[t[0]];
+    const Vertex n = (mesh.positions[t[1]] - p0).cross(mesh.positions[t[2]] - p0);
+    bool behind = n.squaredNorm() > 0, in_front = behind;
+    const Vertex unit = behind ? n.normalized() : n;
+    for (const Vertex& v : points) {
+      const double height = unit.dot(v - p0);
+      behind = behind && height <= tolerance;
+      in_front = in_front && height >= -tolerance;
+    }
+    sides.behind.push_back(behind);
+    sides.in_front.push_back(in_front);
+  }
+  return sides;
+}
+
 // An intersect context that carries which instances a query sees; the scenes' context
 // filter function reads it (Embree passes the context to every hit it considers).
 struct FilterContext {
@@ -76,6 +103,11 @@ struct RenderWorld::Impl {
   std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
   std::size_t instance_count = 0;
   bool has_inside = false;
+  std::vector<BoundingBox> instance_bounds;
+  std::vector<Sphere> instance_spheres;
+  std::vector<const TangentSides*> instance_sides;
+  std::vector<const TriangleMesh*> instance_meshes;
+  std::map<std::string, TangentSides> mesh_sides;
 
   ~Impl() {
     for (RTCScene scene : owned) rtcReleaseScene(scene);
@@ -142,7 +174,9 @@ struct RenderWorld::Impl {
       TraversalCounts& counts = g_thread_counts;
       for (std::size_t i = 0; i < it->second.size(); ++i) {
         const auto& instance = it->second[i];
-        if (!instance || static_cast<int>(i) == filter.skip || (filter.only >= 0 && static_cast<int>(i) != filter.only)) continue;
+        if (!instance || static_cast<int>(i) == filter.skip || (filter.only >= 0 && static_cast<int>(i) != filter.only) ||
+            (filter.bits & instance_mask(i)) == 0)
+          continue;
         ++counts.nodes;
         if (instance->world.empty() || !segment_meets_box(from, to, instance->world)) continue;
         if (instance->object->segment_blocked(instance->to_object * from, instance->to_object * to, counts)) return true;
@@ -153,8 +187,8 @@ struct RenderWorld::Impl {
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
     RTCRay ray = segment_ray(from, to);
-    ray.mask = kAllInstances;
-    if (filter.only >= 0) ray.mask = instance_mask(static_cast<std::size_t>(filter.only));
+    ray.mask = kAllInstances & filter.bits;
+    if (filter.only >= 0) ray.mask &= instance_mask(static_cast<std::size_t>(filter.only));
     if (filter.skip >= 0) ray.mask &= ~instance_mask(static_cast<std::size_t>(filter.skip));
     const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
     context.context.filter = shared_bit ? instance_filter : nullptr;
@@ -194,6 +228,18 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, mask);
     if (p.inside) w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, mask);
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
+    auto sides = w.mesh_sides.find(instance.mesh);
+    if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(scene.mesh(instance.mesh).mesh)).first;
+    w.instance_sides.push_back(&sides->second);
+    w.instance_meshes.push_back(&scene.mesh(instance.mesh).mesh);
+    BoundingBox world;
+    const std::vector<Vertex> points = used_positions(scene.mesh(instance.mesh).mesh);
+    for (const Vertex& v : points) world.extend(instance.transform * v);
+    Sphere sphere{0.5 * (world.min + world.max), 0.0};
+    for (const Vertex& v : points) sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
+    sphere.radius *= 1 + 1e-9;
+    w.instance_bounds.push_back(world);
+    w.instance_spheres.push_back(sphere);
     w.is_exact.push_back(!p.stochastic.has_value());
     w.stochastic_kinds.push_back(p.stochastic ? p.stochastic->kind : ProxyKind::outside);
     w.has_outside.push_back(p.outside.has_value());
@@ -235,6 +281,16 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
   if (rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
     hit.instance = static_cast<int>(rayhit.hit.instID[0]);
     normal = impl_->normal_matrices[static_cast<std::size_t>(hit.instance)] * normal;  // Embree gives it in object space
+    const TangentSides& sides = *impl_->instance_sides[static_cast<std::size_t>(hit.instance)];
+    if (!sides.behind.empty()) {
+      // The winding's normal in world space; the shading normal faces the camera ray.
+      const TriangleMesh& mesh = *impl_->instance_meshes[static_cast<std::size_t>(hit.instance)];
+      const Triangle& t = mesh.triangles[rayhit.hit.primID];
+      const Vertex winding = impl_->normal_matrices[static_cast<std::size_t>(hit.instance)] *
+                             (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      const bool along = winding.dot(direction) < 0;
+      hit.own_mesh_behind = along ? sides.behind[rayhit.hit.primID] != 0 : sides.in_front[rayhit.hit.primID] != 0;
+    }
   } else {
     hit.light = impl_->light_of_triangle[rayhit.hit.primID];
     hit.light_front = impl_->light_normals[rayhit.hit.primID].dot(direction) < 0;
@@ -266,6 +322,11 @@ ProxyKind RenderWorld::stochastic_kind(int skip) const {
   }
   return all_outside ? ProxyKind::outside : all_inside ? ProxyKind::inside : ProxyKind::general;
 }
+
+unsigned instance_bit(std::size_t instance) { return instance_mask(instance); }
+
+const BoundingBox& RenderWorld::instance_bounds(std::size_t instance) const { return impl_->instance_bounds[instance]; }
+const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return impl_->instance_spheres[instance]; }
 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }

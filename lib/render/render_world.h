@@ -37,13 +37,23 @@ struct SurfaceHit {
   int instance = -1;  ///< scene instance, or -1 for a light
   int light = -1;     ///< light index when a light was hit
   bool light_front = false;
+  /// The instance's own mesh lies entirely on the far side of the tangent plane here (or
+  /// in it): a shadow segment that leaves towards `normal` cannot meet it again. Known for
+  /// meshes of up to 4096 triangles (walls, floors, boxes), false otherwise.
+  bool own_mesh_behind = false;
 };
 
 /// What a shadow query should see of the instances.
 struct InstanceFilter {
   int skip = -1;  ///< ignore this instance (-1: none)
   int only = -1;  ///< see only this instance (-1: all)
+  /// Only instances whose bit (instance_bit) is set; instances sharing a bit (beyond 31)
+  /// may be seen too, which keeps every use conservative.
+  unsigned bits = 0x7FFFFFFFu;
 };
+
+/// The mask bit of an instance (bit i % 31).
+unsigned instance_bit(std::size_t instance);
 
 class RenderWorld {
  public:
@@ -77,6 +87,11 @@ class RenderWorld {
   /// The kind of the union of every instance's stochastic proxy except `skip`'s: outside
   /// (inside) when each is outside (inside) or exact, general otherwise.
   ProxyKind stochastic_kind(int skip) const;
+  /// World-space bounding box of an instance's mesh, and the sphere around its centre that
+  /// holds every vertex (tighter than the box's for round meshes).
+  const BoundingBox& instance_bounds(std::size_t instance) const;
+  const Sphere& instance_sphere(std::size_t instance) const;
+
   /// Whether any instance has an inside proxy (else inside_blocks is always false).
   bool has_inside_proxies() const;
   /// Whether every instance other than `skip` has an outside proxy.

@@ -94,6 +94,47 @@ class LightSampler {
   double total_ = 0;
 };
 
+// The shaft from a point to every light: the convex hull of the point and the lights'
+// corners. meets() is conservative: false only when an instance is provably outside the
+// shaft: its box separated along a coordinate axis, or its bounding sphere outside the
+// circular cone around the shaft.
+class LightShaft {
+ public:
+  explicit LightShaft(const Scene& scene) {
+    for (const AreaLight& light : scene.lights)
+      for (const auto& t : light.triangles) corners_.insert(corners_.end(), t.begin(), t.end());
+  }
+  bool meets(const Vertex& apex, const BoundingBox& box, const Sphere& sphere) const {
+    if (box.empty()) return false;
+    // Separating coordinate axes: the shaft's extent is that of its points.
+    Vertex lo = apex, hi = apex;
+    for (const Vertex& c : corners_) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
+    if ((hi.array() < box.min.array()).any() || (lo.array() > box.max.array()).any()) return false;
+    // The cone from the apex around the corners against the box's bounding sphere.
+    Vertex axis = Vertex::Zero();
+    for (const Vertex& c : corners_) axis += (c - apex).normalized();
+    if (axis.norm() == 0) return true;
+    axis.normalize();
+    double cos_half = 1, reach = 0;
+    for (const Vertex& c : corners_) {
+      cos_half = std::min(cos_half, axis.dot((c - apex).normalized()));
+      reach = std::max(reach, (c - apex).norm());
+    }
+    if (cos_half <= 0) return true;  // wider than a half-space: no cone test
+    const Vertex centre = sphere.center;
+    const double radius = sphere.radius;
+    const Vertex v = centre - apex;
+    const double distance = v.norm();
+    if (distance <= radius) return true;
+    if (distance - radius > reach) return false;
+    const double angle = std::acos(std::clamp(axis.dot(v) / distance, -1.0, 1.0));
+    return angle <= std::acos(cos_half) + std::asin(std::min(1.0, radius / distance));
+  }
+
+ private:
+  std::vector<Vertex> corners_;
+};
+
 double scene_scale(const Scene& scene) {
   BoundingBox box;
   for (const SceneInstance& instance : scene.instances) {
@@ -130,7 +171,7 @@ nlohmann::json RenderStats::to_json() const {
           {"exact_tests_per_shadow_ray", static_cast<double>(exact_tests) / rays},
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
           {"stochastic_terms", {{"a_proxy_only", term_counts[0]}, {"b_mesh_if_proxy_hit", term_counts[1]}, {"c_mesh_if_proxy_missed", term_counts[2]}}},
-          {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}}},
+          {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}, {"shading_points_with_culled_shaft", shafts_culled}}},
           {"counted", counted},
           {"traversal_steps", counted ? nlohmann::json(traversal_steps) : nlohmann::json(nullptr)},
           {"primitive_tests", counted ? nlohmann::json(primitive_tests) : nlohmann::json(nullptr)},
@@ -139,11 +180,13 @@ nlohmann::json RenderStats::to_json() const {
 }
 
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
-                             const Probabilities& p, double u, bool split, RenderStats& stats) {
+                             const Probabilities& p, double u, bool split, RenderStats& stats, bool own_cannot_block) {
   InstanceFilter rest;
   if (split) {
-    ++stats.exact_tests;
-    if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return 0.0;
+    if (!own_cannot_block) {
+      ++stats.exact_tests;
+      if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return 0.0;
+    }
     rest.skip = own_instance;
   }
   ++stats.proxy_tests;
@@ -175,6 +218,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const double aspect = static_cast<double>(width) / height;
   const double offset = 1e-6 * scene_scale(scene);
   const LightSampler lights(scene);
+  const LightShaft shaft(scene);
   const bool stochastic = options.visibility == VisibilityMode::stochastic;
   const bool counting = world.counting();
 
@@ -239,6 +283,15 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       p1_count[pixel] += 1;
     }
 
+    // bounds: the instances (other than the own) that the shaft from x to the lights meets.
+    unsigned shaft_bits = 0;
+    if (options.visibility == VisibilityMode::bounds) {
+      for (std::size_t i = 0; i < scene.instances.size(); ++i)
+        if (static_cast<int>(i) != own && shaft.meets(x, world.instance_bounds(i), world.instance_sphere(i))) shaft_bits |= instance_bit(i);
+      if (shaft_bits == 0) ++stats.shafts_culled;
+    }
+
+    bool traced_before = false;
     Color radiance = Color::Zero();
     for (int s = 0; s < options.shadow_rays; ++s) {
       const LightSample y = lights.sample(random);
@@ -257,27 +310,39 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
           break;
         case VisibilityMode::stochastic:
-          visibility = stochastic_visibility(world, x, y.position, own, probabilities, random.uniform(), options.split, stats);
+          visibility = stochastic_visibility(world, x, y.position, own, probabilities, random.uniform(), options.split, stats,
+                                             hit->own_mesh_behind);
           break;
         case VisibilityMode::bounds: {
           // The rest of the scene first: free if the segment misses every other instance's
-          // outside proxy (then only the own instance is traced), blocked if it meets an
-          // inside proxy; otherwise one exact query over everything.
-          const InstanceFilter rest{.skip = own, .only = -1};
-          ++stats.proxy_tests;
-          if (!world.outside_blocks(x, y.position, rest)) {
+          // outside proxy (only those the light shaft meets can be hit), blocked if it meets
+          // an inside proxy; otherwise one exact query over everything. When the rest is
+          // free, the own instance is traced unless it lies behind the tangent plane.
+          // After a segment from this point needed the exact query, the next ones go straight
+          // to it: the proxies rarely prove anything where they just failed to.
+          const InstanceFilter rest{.skip = own, .only = -1, .bits = shaft_bits};
+          bool rest_free = shaft_bits == 0;
+          if (!rest_free && !traced_before) {
+            ++stats.proxy_tests;
+            rest_free = !world.outside_blocks(x, y.position, rest);
+          }
+          if (rest_free) {
             ++stats.bounds_unoccluded;
-            ++stats.exact_tests;
-            visibility = world.mesh_blocks(x, y.position, {.skip = -1, .only = own}) ? 0 : 1;
+            visibility = 1;
+            if (!hit->own_mesh_behind) {
+              ++stats.exact_tests;
+              visibility = world.mesh_blocks(x, y.position, {.skip = -1, .only = own}) ? 0 : 1;
+            }
             break;
           }
-          if (world.has_inside_proxies()) {
+          if (world.has_inside_proxies() && !traced_before) {
             ++stats.proxy_tests;
             if (world.inside_blocks(x, y.position, rest)) {
               ++stats.bounds_occluded;
               break;
             }
           }
+          traced_before = true;
           ++stats.bounds_traced;
           ++stats.exact_tests;
           visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
@@ -324,6 +389,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     for (int i = 0; i < 3; ++i) r.term_counts[i] += s.term_counts[i];
     r.bounds_unoccluded += s.bounds_unoccluded, r.bounds_occluded += s.bounds_occluded, r.bounds_traced += s.bounds_traced;
     r.traversal_steps += s.traversal_steps, r.primitive_tests += s.primitive_tests;
+    r.shafts_culled += s.shafts_culled;
   }
   result.stats.passes = passes;
   result.stats.counted = counting;

@@ -42,6 +42,7 @@ struct RenderStats {
   std::uint64_t probe_rays = 0;   ///< adaptive probe segments (each tests proxy and mesh)
   std::uint64_t term_counts[3] = {0, 0, 0};  ///< stochastic: times terms (a), (b), (c) were chosen
   std::uint64_t bounds_unoccluded = 0, bounds_occluded = 0, bounds_traced = 0;
+  std::uint64_t shafts_culled = 0;  ///< bounds: shading points whose light shaft missed every other instance
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries
@@ -62,7 +63,10 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 /// The irradiance-based estimate for one shading point's shadow segment, exposed for
 /// tests: eq. 8 with the given probabilities. `u` chooses the term. Returns the estimate
 /// and counts tests into `stats`.
+/// With `split`, the own instance is traced exactly first, unless `own_cannot_block`
+/// (SurfaceHit::own_mesh_behind).
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
-                             const Probabilities& probabilities, double u, bool split, RenderStats& stats);
+                             const Probabilities& probabilities, double u, bool split, RenderStats& stats,
+                             bool own_cannot_block = false);
 
 }  // namespace visproxy
