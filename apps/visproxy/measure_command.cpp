@@ -21,6 +21,7 @@ struct MeasureCommandOptions {
   std::size_t rays = 1'000'000;
   std::uint64_t seed = 1;
   std::size_t timed_rays = 200'000;
+  std::filesystem::path scene;
 };
 
 double value(const nlohmann::json& m, const char* key) { return m[key]["value"].get<double>(); }
@@ -34,12 +35,15 @@ void add_measure_command(CLI::App& app, int& exit_code) {
       "Trace seeded isotropic lines through MESH's bounding sphere against the mesh and every proxy in DIR (Embree, "
       "all cores) and record per proxy, under `measure` in DIR/manifest.json: ray-type counts, f_hit, f_miss, V_avg "
       "and the GSSA ratio with 95 % intervals, the estimator's optimal probabilities and variance, and the cost per "
-      "ray of proxy and mesh on one core.");
+      "ray of proxy and mesh on one core. With --scene, the rays are the scene's shadow segments instead.");
   command->add_option("mesh", options->mesh, "The mesh the proxies were built from")->required();
   command->add_option("dir", options->folder, "Proxy folder written by 'visproxy build'")->required();
   command->add_option("--rays", options->rays, "Isotropic lines [default: 1000000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
   command->add_option("--seed", options->seed, "Seed of the lines [default: 1]");
+  command->add_option("--scene", options->scene,
+                      "Measure on a scene's shadow segments instead: from points its camera sees on other instances to "
+                      "its lights, against every instance of MESH in it (--rays of them)");
   command->add_option("--timed-rays", options->timed_rays, "Lines timed on one core for the cost per ray [default: 200000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
 
@@ -47,15 +51,22 @@ void add_measure_command(CLI::App& app, int& exit_code) {
     const auto start = std::chrono::steady_clock::now();
     nlohmann::json manifest = read_manifest(options->folder);
     const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest);
-    MeasureOptions measure{.rays = options->rays, .seed = options->seed, .timing = {.rays = options->timed_rays}, .on_start = {}};
+    MeasureOptions measure{.rays = options->rays, .seed = options->seed, .scene = options->scene,
+                           .timing = {.rays = options->timed_rays}, .on_start = {}};
     if (::isatty(STDERR_FILENO))
       measure.on_start = [](std::string_view name) { std::cerr << "visproxy measure: " << name << " ...\n"; };
     manifest = measure_proxies(mesh, options->folder, std::move(manifest), measure);
     write_manifest(options->folder, manifest);
 
-    std::printf("visproxy measure: %zu proxies of %s on %zu isotropic lines (seed %llu) through its bounding sphere\n",
-                manifest["proxies"].size(), options->mesh.string().c_str(), options->rays,
-                static_cast<unsigned long long>(options->seed));
+    const nlohmann::json& ray_set = manifest["proxies"].empty() ? nlohmann::json::object() : manifest["proxies"][0]["measure"]["rays"];
+    if (options->scene.empty())
+      std::printf("visproxy measure: %zu proxies of %s on %zu isotropic lines (seed %llu) through its bounding sphere\n",
+                  manifest["proxies"].size(), options->mesh.string().c_str(), options->rays,
+                  static_cast<unsigned long long>(options->seed));
+    else
+      std::printf("visproxy measure: %zu proxies of %s on %zu shadow segments of %s (seed %llu)\n", manifest["proxies"].size(),
+                  options->mesh.string().c_str(), ray_set.value("count", std::size_t{0}), options->scene.string().c_str(),
+                  static_cast<unsigned long long>(options->seed));
     std::printf("%-22s %-8s %8s %8s %8s %8s %-20s %9s %9s %9s %7s\n", "name", "kind", "f_hit", "f_miss", "V_avg", "GSSA",
                 "p1/p2/p3", "variance", "proxy ns", "mesh ns", "ratio");
     for (const nlohmann::json& entry : manifest["proxies"]) {

@@ -2,8 +2,10 @@
 
 #include <chrono>
 
+#include "core/errors.h"
 #include "evaluate/proxy_folder.h"
 #include "measure/random_lines.h"
+#include "render/renderer.h"
 
 namespace visproxy {
 namespace {
@@ -46,15 +48,62 @@ json measurement_json(const ProxyMeasurement& m) {
 
 json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder, json manifest,
                      const MeasureOptions& options) {
-  const RayScene mesh_scene(mesh);
-  const ReferenceRays reference =
-      trace_reference(mesh_scene, isotropic_lines(bounding_sphere(mesh), options.rays, options.seed), options.timing);
-  const json rays = ray_set_json(mesh, options);
+  // The mesh's instances in the scene (none: isotropic lines in the mesh's own frame).
+  std::vector<Eigen::Affine3d> placements;
+  std::vector<Segment> segments;
+  json rays;
+  if (options.scene.empty()) {
+    segments = isotropic_lines(bounding_sphere(mesh), options.rays, options.seed);
+    rays = ray_set_json(mesh, options);
+    placements.push_back(Eigen::Affine3d::Identity());
+  } else {
+    const Scene scene = load_scene(options.scene);
+    std::vector<bool> exclude(scene.instances.size(), false);
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+      if (scene.mesh(scene.instances[i].mesh).mesh == mesh) {
+        exclude[i] = true;
+        placements.push_back(scene.instances[i].transform);
+      }
+    if (placements.empty()) throw InvalidInputError(options.scene, "no instance of the scene uses the measured mesh");
+    const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
+    for (const ShadowSegment& s : scene_shadow_segments(scene, world, options.rays, options.seed, exclude))
+      segments.push_back({s.from, s.to});
+    if (segments.empty()) throw InvalidInputError(options.scene, "the camera sees no lit surface to measure from");
+    rays = {{"kind", "scene shadow segments"},
+            {"description", "from points the camera sees on other instances to area-uniform points on the lights"},
+            {"scene", options.scene.string()},
+            {"count", segments.size()},
+            {"seed", options.seed},
+            {"instances_of_mesh", placements.size()},
+            {"timed_rays", std::min(segments.size(), options.timing.rays)}};
+  }
+  auto place_mesh = [&](const TriangleMesh& object) {
+    TriangleMesh placed;
+    for (const Eigen::Affine3d& t : placements) {
+      TriangleMesh copy = object;
+      for (Vertex& p : copy.positions) p = t * p;
+      append_mesh(placed, copy);
+    }
+    return placed;
+  };
+  auto place_spheres = [&](const std::vector<Sphere>& object) {
+    std::vector<Sphere> placed;
+    for (const Eigen::Affine3d& t : placements) {
+      const double scale = std::cbrt(std::abs(t.linear().determinant()));
+      if (!((t.linear() / scale).transpose() * (t.linear() / scale)).isIdentity(1e-9))
+        throw InvalidInputError(options.scene, "sphere proxies need instances placed without shear or uneven scale");
+      for (const Sphere& s : object) placed.push_back({t * s.center, scale * s.radius});
+    }
+    return placed;
+  };
+  const RayScene mesh_scene(placements.size() == 1 && options.scene.empty() ? mesh : place_mesh(mesh));
+  const ReferenceRays reference = trace_reference(mesh_scene, std::move(segments), options.timing);
   for (json& entry : manifest.at("proxies")) {
     if (options.on_start) options.on_start(entry.at("name").get<std::string>());
     const auto start = std::chrono::steady_clock::now();
     const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
-    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(geometry.spheres) : RayScene(geometry.mesh);
+    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(place_spheres(geometry.spheres))
+                                                                        : RayScene(place_mesh(geometry.mesh));
     json measured = measurement_json(measure_proxy(reference, proxy_scene, entry_kind(entry), options.timing));
     measured["rays"] = rays;
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <filesystem>
 #include <string_view>
 
 #include "measure/proxy_measurement.h"
@@ -12,18 +13,22 @@
 namespace visproxy {
 
 struct MeasureOptions {
-  std::size_t rays = 1'000'000;  ///< isotropic lines through the mesh's bounding sphere
+  std::size_t rays = 1'000'000;  ///< isotropic lines through the mesh's bounding sphere, or scene segments
   std::uint64_t seed = 1;
+  /// A scene file: measure on its shadow segments instead (scene_shadow_segments), from
+  /// points the camera sees on other instances to its lights, against every instance of
+  /// the mesh in the scene (and the same instances of each proxy).
+  std::filesystem::path scene;
   TimingOptions timing;
   /// Called before each proxy is measured with its name (progress display); may be empty.
   std::function<void(std::string_view)> on_start;
 };
 
-/// The ray set every proxy of `mesh` is measured on, as the manifest records it.
+/// The isotropic ray set every proxy of `mesh` is measured on, as the manifest records it.
 nlohmann::json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& options);
 
 /// Measures every proxy listed in `manifest` (FOLDER's) on one seeded set of isotropic
-/// lines and returns the manifest with a `measure` object added to each entry:
+/// lines (or scene segments) and returns the manifest with a `measure` object added to each entry:
 ///   rays (count, seed), counts [n1, n2, n3, n4], f_hit / f_miss / v_avg / gssa_ratio
 ///   {value, lower, upper} (95 %), probabilities {form, p1, p2, p3}, variance {optimal,
 ///   equal}, rays_contradicting_claim, cost_ns_per_ray {proxy, mesh, estimator,

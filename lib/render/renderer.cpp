@@ -207,6 +207,34 @@ double stochastic_visibility(const RenderWorld& world, const Vertex& from, const
   return world.mesh_blocks(from, to, rest) ? -1.0 / p.p3 : 0.0;
 }
 
+std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
+                                                 std::uint64_t seed, const std::vector<bool>& exclude) {
+  const Camera& camera = scene.camera;
+  const Vertex forward = (camera.at - camera.from).normalized();
+  const Vertex right = forward.cross(camera.up).normalized();
+  const Vertex up = right.cross(forward);
+  const double tan_half = std::tan(camera.fov_degrees * std::numbers::pi / 360.0);
+  const double aspect = static_cast<double>(camera.width) / camera.height;
+  const double offset = 1e-6 * scene_scale(scene);
+  const LightSampler lights(scene);
+  std::vector<ShadowSegment> segments;
+  if (lights.empty()) return segments;
+  PixelRandom random(seed, 0, 0);
+  for (std::size_t attempt = 0; attempt < 100 * count && segments.size() < count; ++attempt) {
+    const double sx = (2 * random.uniform() - 1) * tan_half * aspect, sy = (1 - 2 * random.uniform()) * tan_half;
+    const std::optional<SurfaceHit> hit = world.intersect(camera.from, (forward + sx * right + sy * up).normalized());
+    const LightSample y = lights.sample(random);
+    if (!hit || hit->light >= 0 || exclude[static_cast<std::size_t>(hit->instance)]) continue;
+    const Vertex x = hit->position + offset * hit->normal;
+    const Vertex to_light = y.position - x;
+    double cos_y = -y.normal.dot(to_light);
+    if (y.two_sided) cos_y = std::abs(cos_y);
+    if (hit->normal.dot(to_light) <= 0 || cos_y <= 0) continue;
+    segments.push_back({x, y.position});
+  }
+  return segments;
+}
+
 RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const Camera& camera = scene.camera;

@@ -63,6 +63,17 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 /// The irradiance-based estimate for one shading point's shadow segment, exposed for
 /// tests: eq. 8 with the given probabilities. `u` chooses the term. Returns the estimate
 /// and counts tests into `stats`.
+/// Shadow segments as a renderer traces them, for measuring proxies on a scene: from points
+/// the camera sees (uniform over the image, jittered) to points sampled on the lights by
+/// area, the segments a Lambertian surface would trace (light in front of both). Points on
+/// instances in `exclude` (visibility splitting traces those exactly) and on lights are
+/// skipped. Deterministic for a seed; stops after 100 x count camera samples.
+struct ShadowSegment {
+  Vertex from, to;
+};
+std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
+                                                 std::uint64_t seed, const std::vector<bool>& exclude);
+
 /// With `split`, the own instance is traced exactly first, unless `own_cannot_block`
 /// (SurfaceHit::own_mesh_behind).
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,

@@ -129,6 +129,33 @@ TEST_F(CliVerifyMeasure, MeasureRecordsFiguresReproducibly) {
     EXPECT_EQ(a.at("proxies")[i].at("measure").at("counts"), b.at("proxies")[i].at("measure").at("counts"));
 }
 
+// Shadow segments of the Cornell box against the bunny placed in it, and a mesh the scene
+// does not hold.
+TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
+  const std::string bunny = testing::cgal_mesh("bunny00.off").string();
+  const auto folder = folder_ / "bunny";
+  ASSERT_EQ(testing::run_visproxy("build '" + bunny + "' -o '" + folder.string() + "' --proxy aabb --proxy hull").exit_code, 0);
+  const std::string scene = (std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/scenes/cornell.json").string();
+  const auto result = testing::run_visproxy("measure '" + bunny + "' '" + folder.string() + "' --scene '" + scene +
+                                            "' --rays 20000 --timed-rays 1000");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("20000 shadow segments of"), std::string::npos) << result.out;
+  const json m = json::parse(read_file(folder / "manifest.json"));
+  for (const json& entry : m.at("proxies")) {
+    const json& measured = entry.at("measure");
+    EXPECT_EQ(measured.at("rays").at("kind"), "scene shadow segments");
+    EXPECT_EQ(measured.at("rays").at("instances_of_mesh"), 1);
+    const auto counts = measured.at("counts").get<std::vector<std::uint64_t>>();
+    EXPECT_EQ(counts[0] + counts[1] + counts[2] + counts[3], 20000u);
+    EXPECT_EQ(counts[1], 0u);     // outside proxies: nothing the bunny blocks gets past them
+    EXPECT_GT(counts[0], 100u);   // the bunny does shadow part of the box
+  }
+  // The knot is not in the Cornell box.
+  const auto absent = run("measure", " --scene '" + scene + "' --rays 1000");
+  EXPECT_EQ(absent.exit_code, 2);
+  EXPECT_NE(absent.err.find("no instance of the scene uses the measured mesh"), std::string::npos) << absent.err;
+}
+
 TEST_F(CliVerifyMeasure, BadInputGetsOneLineAndExitTwo) {
   const std::string other = testing::cgal_mesh("knot2.off").string();
   struct Case {
