@@ -15,6 +15,8 @@ packages="build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libtet1.5-dev libopenmesh-dev libembree-dev libeigen3-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   libmeshoptimizer-dev"
+# The test suite opens the HTML report in headless Chromium.
+if [ "$mode" = test ]; then packages="$packages chromium"; fi
 
 missing=""
 for package in $packages; do
@@ -42,7 +44,13 @@ cmake --build --preset release
 
 if [ "$mode" = demo ]; then
   ./build/release/apps/visproxy info build/release/meshes/bunny00.off
-  ./build/release/apps/visproxy build build/release/meshes/bunny00.off -o build/release/demo/bunny00
+  mesh=build/release/meshes/bunny00.off
+  out=build/release/demo/bunny00
+  ./build/release/apps/visproxy build "$mesh" -o "$out"
+  ./build/release/apps/visproxy verify "$mesh" "$out"
+  ./build/release/apps/visproxy measure "$mesh" "$out"
+  ./build/release/apps/visproxy report "$out"
+  echo "visproxy: report of the bunny's proxies: $out/report.html (and report.md, f_miss.svg)"
 else
   ctest --preset release
 fi

@@ -85,6 +85,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
         options->proxies.empty() ? default_proxy_specs() : parse_proxy_specs(options->proxies);
     const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld});
     ManifestMesh described{.path = options->mesh,
+                           .weld = options->weld == Weld::never ? "never" : options->weld == Weld::always ? "always" : "auto",
                            .vertices = mesh.positions.size(),
                            .triangles = mesh.triangles.size(),
                            .components = analyze_topology(mesh).components,

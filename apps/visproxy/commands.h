@@ -11,5 +11,10 @@ enum ExitCode : int { kSuccess = 0, kCheckFailed = 1, kBadInput = 2, kInternalEr
 
 void add_info_command(CLI::App& app, int& exit_code);
 void add_build_command(CLI::App& app, int& exit_code);
+void add_verify_command(CLI::App& app, int& exit_code);
+void add_measure_command(CLI::App& app, int& exit_code);
+void add_report_command(CLI::App& app, int& exit_code);
+void add_render_command(CLI::App& app, int& exit_code);
+void add_generate_command(CLI::App& app, int& exit_code);
 
 }  // namespace visproxy::cli

@@ -19,6 +19,11 @@ int main(int argc, char** argv) {
   int exit_code = kSuccess;
   add_info_command(app, exit_code);
   add_build_command(app, exit_code);
+  add_verify_command(app, exit_code);
+  add_measure_command(app, exit_code);
+  add_report_command(app, exit_code);
+  add_render_command(app, exit_code);
+  add_generate_command(app, exit_code);
 
   try {
     app.parse(argc, argv);

@@ -14,6 +14,16 @@ BoundingBox bounding_box(const TriangleMesh& mesh) {
   return box;
 }
 
+std::vector<Vertex> used_positions(const TriangleMesh& mesh) {
+  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
+  for (const Triangle& t : mesh.triangles)
+    for (VertexIndex v : t) used[v] = 1;
+  std::vector<Vertex> points;
+  for (std::size_t v = 0; v < used.size(); ++v)
+    if (used[v]) points.push_back(mesh.positions[v]);
+  return points;
+}
+
 void append_mesh(TriangleMesh& mesh, const TriangleMesh& part) {
   const auto base = static_cast<VertexIndex>(mesh.positions.size());
   mesh.positions.insert(mesh.positions.end(), part.positions.begin(), part.positions.end());

@@ -42,6 +42,9 @@ struct BoundingBox {
 /// Bounding box of the vertices that triangles use (unreferenced vertices are ignored).
 BoundingBox bounding_box(const TriangleMesh& mesh);
 
+/// The positions of the vertices that triangles use, in index order (each once).
+std::vector<Vertex> used_positions(const TriangleMesh& mesh);
+
 /// Adds `part`'s vertices and triangles to `mesh` (indices shifted; nothing is welded).
 void append_mesh(TriangleMesh& mesh, const TriangleMesh& part);
 

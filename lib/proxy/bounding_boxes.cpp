@@ -23,16 +23,6 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
 
-std::vector<Vertex> used_points(const TriangleMesh& mesh) {
-  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
-  for (const Triangle& t : mesh.triangles)
-    for (VertexIndex v : t) used[v] = 1;
-  std::vector<Vertex> points;
-  for (std::size_t v = 0; v < used.size(); ++v)
-    if (used[v]) points.push_back(mesh.positions[v]);
-  return points;
-}
-
 Point to_point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
 
 // Three indices of non-collinear points, or none.
@@ -159,7 +149,7 @@ TriangleMesh box_mesh(const std::array<Vertex, 8>& corners) {
 }
 
 TriangleMesh axis_aligned_box_mesh(const TriangleMesh& mesh) {
-  const std::vector<Vertex> points = used_points(mesh);
+  const std::vector<Vertex> points = used_positions(mesh);
   if (points.empty()) throw InvalidInputError("", "the mesh has no triangles: a box needs at least one");
   if (!find_spanning_triangle(points)) throw InvalidInputError("", "all vertices are collinear: a box around them has no area");
   const BoundingBox bounds = bounding_box(mesh);
@@ -170,7 +160,7 @@ TriangleMesh axis_aligned_box_mesh(const TriangleMesh& mesh) {
 }
 
 OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBoxOptions& options) {
-  const std::vector<Vertex> points = used_points(mesh);
+  const std::vector<Vertex> points = used_positions(mesh);
   if (points.empty()) throw InvalidInputError("", "the mesh has no triangles: a box needs at least one");
   const auto spanning = find_spanning_triangle(points);
   if (!spanning) throw InvalidInputError("", "all vertices are collinear: a box around them has no area");

@@ -52,6 +52,7 @@ json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh&
       {"generator", std::string("visproxy ") + VISPROXY_VERSION},
       {"mesh",
        {{"path", mesh.path.string()},
+        {"weld", mesh.weld},
         {"vertices", mesh.vertices},
         {"triangles", mesh.triangles},
         {"components", mesh.components},

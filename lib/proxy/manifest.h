@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <string>
 
 #include "mesh/triangle_mesh.h"
 #include "proxy/build_proxies.h"
@@ -14,6 +15,7 @@ namespace visproxy {
 /// The input mesh as the manifest describes it.
 struct ManifestMesh {
   std::filesystem::path path;  ///< as the user gave it
+  std::string weld = "auto";   ///< how it was read: "auto", "never" or "always" (read_mesh's Weld)
   std::size_t vertices = 0;
   std::size_t triangles = 0;
   std::size_t components = 0;

@@ -19,28 +19,6 @@ namespace {
 
 using nlohmann::json;
 
-json schema() {
-  return json::parse(read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/schemas/manifest.schema.json"));
-}
-
-// Every required key is present and every present key is described, at the top level,
-// in `mesh`, in `options` and in each proxy entry.
-void expect_matches_schema(const json& manifest) {
-  const json s = schema();
-  auto check = [](const json& object, const json& part, const std::string& where) {
-    for (const auto& key : part.at("required")) EXPECT_TRUE(object.contains(key.get<std::string>())) << where << "." << key;
-    for (const auto& [key, value] : object.items()) EXPECT_TRUE(part.at("properties").contains(key)) << where << "." << key;
-  };
-  check(manifest, s, "manifest");
-  check(manifest.at("mesh"), s.at("properties").at("mesh"), "mesh");
-  check(manifest.at("options"), s.at("properties").at("options"), "options");
-  const json& entry_schema = s.at("properties").at("proxies").at("items");
-  for (const json& entry : manifest.at("proxies")) {
-    check(entry, entry_schema, entry.at("name").get<std::string>());
-    check(entry.at("error"), entry_schema.at("properties").at("error"), "error");
-  }
-}
-
 class CliBuild : public testing::ScratchFolder {};
 
 TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
@@ -51,7 +29,7 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
   EXPECT_NE(result.out.find("outer-512"), std::string::npos) << result.out;
 
   const json manifest = json::parse(read_file(folder_ / "manifest.json"));
-  expect_matches_schema(manifest);
+  testing::expect_matches_schema(manifest);
   EXPECT_EQ(manifest.at("mesh").at("triangles"), 6400);
   const TriangleMesh mesh = read_mesh(mesh_path);
 

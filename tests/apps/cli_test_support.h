@@ -6,7 +6,12 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/files.h"
 
 namespace visproxy::testing {
 
@@ -34,6 +39,30 @@ inline CommandResult run_visproxy(const std::string& arguments) {
   }
   std::filesystem::remove(err_path);
   return result;
+}
+
+inline nlohmann::json manifest_schema() {
+  return nlohmann::json::parse(read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/schemas/manifest.schema.json"));
+}
+
+/// Every required key is present and every present key is described, at the top level,
+/// in `mesh`, in `options` and in each proxy entry with its `error`, `verify` and
+/// `measure` objects.
+inline void expect_matches_schema(const nlohmann::json& manifest) {
+  const nlohmann::json s = manifest_schema();
+  auto check = [](const nlohmann::json& object, const nlohmann::json& part, const std::string& where) {
+    for (const auto& key : part.at("required")) EXPECT_TRUE(object.contains(key.get<std::string>())) << where << "." << key;
+    for (const auto& [key, value] : object.items()) EXPECT_TRUE(part.at("properties").contains(key)) << where << "." << key;
+  };
+  check(manifest, s, "manifest");
+  check(manifest.at("mesh"), s.at("properties").at("mesh"), "mesh");
+  check(manifest.at("options"), s.at("properties").at("options"), "options");
+  const nlohmann::json& entry_schema = s.at("properties").at("proxies").at("items");
+  for (const nlohmann::json& entry : manifest.at("proxies")) {
+    check(entry, entry_schema, entry.at("name").get<std::string>());
+    for (const char* part : {"error", "verify", "measure"})
+      if (entry.contains(part)) check(entry.at(part), entry_schema.at("properties").at(part), part);
+  }
 }
 
 }  // namespace visproxy::testing

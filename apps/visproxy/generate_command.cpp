@@ -1,0 +1,96 @@
+// visproxy generate hairball --triangles N -o DIR [--seed S] [--proxy SPEC]...
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "core/errors.h"
+#include "core/files.h"
+#include "mesh/mesh_topology.h"
+#include "mesh/write_mesh.h"
+#include "proxy/build_proxies.h"
+#include "proxy/manifest.h"
+#include "scene/hairball.h"
+
+namespace visproxy::cli {
+namespace {
+
+struct GenerateOptions {
+  std::size_t triangles = 2'000'000;
+  std::filesystem::path folder;
+  std::uint64_t seed = 1;
+  std::vector<std::string> proxies{"hull", "cluster:0.02"};
+  int width = 320, height = 240;
+};
+
+// The hairball above a floor, lit from above: the scene file written beside the mesh.
+std::string hairball_scene(const GenerateOptions& o) {
+  std::string proxies;
+  for (const std::string& spec : o.proxies) proxies += (proxies.empty() ? "\"" : ", \"") + spec + "\"";
+  return "{\n"
+         "  \"format\": \"visproxy-scene\",\n"
+         "  \"format_version\": 1,\n"
+         "  \"description\": \"A procedural hairball of " + std::to_string(o.triangles) + " triangles (seed " +
+         std::to_string(o.seed) + ") over a floor, lit by a square light above: highly complex geometry with no clean inside.\",\n"
+         "  \"meshes\": {\n"
+         "    \"floor\": {\"positions\": [[-4, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]], \"triangles\": [[0, 2, 1], [0, 3, 2]]},\n"
+         "    \"hairball\": {\"file\": \"hairball.ply\", \"proxy_folder\": \"proxies\"}\n"
+         "  },\n"
+         "  \"instances\": [\n"
+         "    {\"mesh\": \"floor\", \"albedo\": [0.7, 0.7, 0.7]},\n"
+         "    {\"mesh\": \"hairball\", \"albedo\": [0.8, 0.55, 0.3], \"transform\": {\"translate\": [0, 1.15, 0]}, \"proxies\": [" +
+         proxies + "]}\n"
+         "  ],\n"
+         "  \"lights\": [\n"
+         "    {\"type\": \"parallelogram\", \"corner\": [-0.75, 3.5, -0.75], \"edge1\": [1.5, 0, 0], \"edge2\": [0, 0, 1.5], \"radiance\": [6, 6, 6]}\n"
+         "  ],\n"
+         "  \"camera\": {\"from\": [0, 1.6, 4.6], \"at\": [0, 0.9, 0], \"up\": [0, 1, 0], \"fov_degrees\": 45, \"width\": " +
+         std::to_string(o.width) + ", \"height\": " + std::to_string(o.height) + "}\n"
+         "}\n";
+}
+
+}  // namespace
+
+void add_generate_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<GenerateOptions>();
+  CLI::App* generate = app.add_subcommand("generate", "Write procedural test scenes");
+  generate->require_subcommand(1);
+  CLI::App* hairball = generate->add_subcommand(
+      "hairball",
+      "A hairball of thin random tubes: writes DIR/hairball.ply, the scene DIR/hairball.json (floor, light, camera) and "
+      "its proxies in DIR/proxies (a 'visproxy build' folder the scene points to).");
+  hairball->add_option("--triangles", o->triangles, "About this many triangles [default: 2000000]")
+      ->check(CLI::Range(std::size_t{480}, std::size_t{200'000'000}));
+  hairball->add_option("-o,--output", o->folder, "Output folder (created if missing)")->required();
+  hairball->add_option("--seed", o->seed, "Seed of the tubes and of the proxy builds [default: 1]");
+  hairball->add_option("--proxy", o->proxies, "Proxies to build and name in the scene [default: hull cluster:0.02]");
+  hairball->add_option("--width", o->width, "Image width of the scene's camera [default: 320]")->check(CLI::Range(1, 16384));
+  hairball->add_option("--height", o->height, "Image height [default: 240]")->check(CLI::Range(1, 16384));
+  hairball->callback([o, &exit_code] {
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<ProxySpec> specs = parse_proxy_specs(o->proxies);
+    const TriangleMesh mesh = make_hairball({.triangles = o->triangles, .seed = o->seed});
+    std::error_code error;
+    std::filesystem::create_directories(o->folder, error);
+    if (error) throw IOError(o->folder, "cannot create the output folder: " + error.message());
+    const std::filesystem::path mesh_path = o->folder / "hairball.ply";
+    const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = o->seed, .on_start = {}};
+    const std::vector<BuiltProxy> proxies = build_proxies(mesh, mesh_path, specs, build);
+    write_mesh(mesh_path, mesh);
+    write_proxy_folder(o->folder / "proxies",
+                       {.path = mesh_path, .weld = "auto", .vertices = mesh.positions.size(), .triangles = mesh.triangles.size(),
+                        .components = analyze_topology(mesh).components, .bounds = bounding_box(mesh)},
+                       proxies, build);
+    write_file_atomically(o->folder / "hairball.json", hairball_scene(*o));
+    std::printf("visproxy generate hairball: %zu triangles (seed %llu) in %s, scene %s, %zu proxies in %s (%.1f s)\n",
+                mesh.triangles.size(), static_cast<unsigned long long>(o->seed), mesh_path.string().c_str(),
+                (o->folder / "hairball.json").string().c_str(), proxies.size(), (o->folder / "proxies").string().c_str(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    exit_code = kSuccess;
+  });
+}
+
+}  // namespace visproxy::cli

@@ -1,0 +1,177 @@
+// visproxy render SCENE -o OUT.pfm [--visibility MODE] [--spp N] [--shadow-rays M] [--seed S] [--seconds T] ...
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include "commands.h"
+#include "core/errors.h"
+#include "core/files.h"
+#include "evaluate/scene_proxies.h"
+#include "render/renderer.h"
+
+namespace visproxy::cli {
+namespace {
+
+struct RenderCommandOptions {
+  std::filesystem::path scene;
+  std::filesystem::path output;
+  VisibilityMode visibility = VisibilityMode::exact;
+  ProbabilityMode probabilities = ProbabilityMode::equal;
+  bool cost_heuristic = false;
+  bool no_split = false;
+  int probe_rays = 16;
+  double probability_floor = 0.05;
+  int spp = 16;
+  int shadow_rays = 1;
+  std::uint64_t seed = 1;
+  double seconds = 0;
+  std::string proxy;
+  std::filesystem::path cache;
+  double exposure = 1.0;
+  bool maps = false;
+};
+
+std::filesystem::path beside(const std::filesystem::path& output, const std::string& suffix) {
+  std::filesystem::path path = output;
+  path.replace_extension();
+  return path.string() + suffix;
+}
+
+}  // namespace
+
+void add_render_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<RenderCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "render",
+      "Render a scene with direct illumination from its area lights (Lambertian surfaces, M shadow rays per camera "
+      "sample). Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
+      "names that are not in the cache yet.");
+  command->add_option("scene", o->scene, "Scene file (JSON; format in data/scenes/README.md)")->required();
+  command->add_option("-o,--output", o->output, "Output image, .pfm")->required();
+  const std::map<std::string, VisibilityMode> modes{
+      {"exact", VisibilityMode::exact}, {"stochastic", VisibilityMode::stochastic}, {"bounds", VisibilityMode::bounds}};
+  command
+      ->add_option("--visibility", o->visibility,
+                   "exact: every shadow ray against the meshes; stochastic: the unbiased estimator with each instance's "
+                   "proxy (own instance exact); bounds: exact answer, proxies only skip work [default: exact]")
+      ->transform(CLI::CheckedTransformer(modes, CLI::ignore_case));
+  const std::map<std::string, ProbabilityMode> probability_modes{{"equal", ProbabilityMode::equal},
+                                                                 {"adaptive", ProbabilityMode::adaptive}};
+  command
+      ->add_option("--probabilities", o->probabilities,
+                   "stochastic: equal, or adaptive (optimal for each shading point from K probe rays) [default: equal]")
+      ->transform(CLI::CheckedTransformer(probability_modes, CLI::ignore_case));
+  command->add_flag("--cost-heuristic", o->cost_heuristic, "stochastic, adaptive: favour the proxy where it agrees with the mesh (eq. 22-24)");
+  command->add_flag("--no-split", o->no_split, "stochastic: estimate the shading point's own instance too, instead of tracing it exactly");
+  command->add_option("--probe-rays", o->probe_rays, "adaptive: probe rays per shading point (K) [default: 16]")->check(CLI::Range(1, 4096));
+  command->add_option("--probability-floor", o->probability_floor,
+                      "adaptive: least probability of each term the proxy kind needs, which keeps the estimate unbiased "
+                      "when the probes miss a ray type [default: 0.05]")
+      ->check(CLI::Range(0.0, 0.33));
+  command->add_option("--spp", o->spp, "Camera samples per pixel [default: 16]")->check(CLI::Range(1, 1 << 24));
+  command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample (M) [default: 1]")->check(CLI::Range(1, 4096));
+  command->add_option("--seed", o->seed, "Seed of the image's random streams and of proxy builds [default: 1]");
+  command->add_option("--seconds", o->seconds, "Stop after the pass that crosses this wall time (0: render all --spp) [default: 0]")
+      ->check(CLI::Range(0.0, 1e7));
+  command->add_option("--proxy", o->proxy, "stochastic: use this spec for every instance that names proxies (default: its first)");
+  command->add_option("--cache", o->cache, "Proxy cache folder [default: $XDG_CACHE_HOME/visproxy or ~/.cache/visproxy]");
+  command->add_option("--exposure", o->exposure, "Scale applied before sRGB encoding of the PNG [default: 1]")->check(CLI::PositiveNumber);
+  command->add_flag("--maps", o->maps, "Also write OUT.cost.png (segment queries per camera sample) and, for stochastic, OUT.p1.png");
+
+  command->callback([o, &exit_code] {
+    if (o->output.extension() != ".pfm")
+      throw InvalidInputError(o->output, "unsupported image format (use .pfm; a PNG is written beside it)");
+    const bool terminal = ::isatty(STDERR_FILENO);
+    const Scene scene = load_scene(o->scene);
+    SceneProxyOptions proxy_options{.cache = o->cache.empty() ? default_proxy_cache() : o->cache,
+                                    .stochastic_spec = std::nullopt,
+                                    .seed = o->seed,
+                                    .on_proxy = nullptr};
+    if (!o->proxy.empty()) proxy_options.stochastic_spec = o->proxy;
+    proxy_options.on_proxy = [&](std::string_view mesh, std::string_view spec, bool cached) {
+      if (!cached) std::cerr << "visproxy render: building " << spec << " of " << mesh << " (cached in "
+                             << proxy_options.cache.string() << ")\n";
+    };
+    const std::vector<MeshProxies> proxies = o->visibility == VisibilityMode::exact
+                                                 ? std::vector<MeshProxies>(scene.instances.size())
+                                                 : prepare_scene_proxies(scene, proxy_options);
+    const RenderWorld world(scene, proxies);
+    RenderOptions options{.visibility = o->visibility,
+                          .probabilities = o->probabilities,
+                          .cost_heuristic = o->cost_heuristic,
+                          .probe_rays = o->probe_rays,
+                          .probability_floor = o->probability_floor,
+                          .split = !o->no_split,
+                          .spp = o->spp,
+                          .shadow_rays = o->shadow_rays,
+                          .seed = o->seed,
+                          .seconds = o->seconds,
+                          .on_pass = nullptr};
+    if (terminal)
+      options.on_pass = [&](int passes, double seconds) {
+        const double fraction = o->seconds > 0 ? std::min(1.0, seconds / o->seconds) : double(passes) / o->spp;
+        const int filled = static_cast<int>(40 * fraction);
+        std::fprintf(stderr, "\rvisproxy render: [%s%s] %3.0f%% %d spp %.1f s", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                     std::string(static_cast<std::size_t>(40 - filled), '.').c_str(), 100 * fraction, passes, seconds);
+      };
+    const RenderResult result = render(scene, world, options);
+    if (terminal) std::fprintf(stderr, "\n");
+
+    if (o->output.has_parent_path()) {
+      std::error_code error;
+      std::filesystem::create_directories(o->output.parent_path(), error);
+      if (error) throw IOError(o->output.parent_path(), "cannot create the output folder: " + error.message());
+    }
+    write_pfm(o->output, result.image);
+    const std::filesystem::path png = beside(o->output, ".png"), stats = beside(o->output, ".stats.json");
+    write_png(png, result.image, o->exposure);
+    if (o->maps) {
+      double most = 0;
+      for (const Color& c : result.cost_map.pixels) most = std::max(most, c.x());
+      write_png(beside(o->output, ".cost.png"), result.cost_map, most > 0 ? 1.0 / most : 1.0);
+      if (!result.p1_map.pixels.empty()) write_png(beside(o->output, ".p1.png"), result.p1_map, 1.0);
+    }
+    nlohmann::json instances = nlohmann::json::array();
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+      instances.push_back({{"mesh", scene.instances[i].mesh},
+                           {"stochastic_proxy", proxies[i].stochastic ? nlohmann::json(proxies[i].stochastic->spec) : nlohmann::json(nullptr)},
+                           {"outside_proxy", proxies[i].outside ? nlohmann::json(proxies[i].outside->spec) : nlohmann::json(nullptr)},
+                           {"inside_proxy", proxies[i].inside ? nlohmann::json(proxies[i].inside->spec) : nlohmann::json(nullptr)}});
+    const nlohmann::json document = {
+        {"scene", o->scene.string()},
+        {"image", o->output.string()},
+        {"width", scene.camera.width},
+        {"height", scene.camera.height},
+        {"visibility", visibility_mode_name(o->visibility)},
+        {"probabilities", o->probabilities == ProbabilityMode::adaptive ? "adaptive" : "equal"},
+        {"cost_heuristic", o->cost_heuristic},
+        {"split", !o->no_split},
+        {"probe_rays", o->probe_rays},
+        {"probability_floor", o->probability_floor},
+        {"spp_requested", o->spp},
+        {"shadow_rays_per_sample", o->shadow_rays},
+        {"seed", o->seed},
+        {"seconds_budget", o->seconds},
+        {"instances", instances},
+        {"stats", result.stats.to_json()}};
+    write_file_atomically(stats, document.dump(2) + "\n");
+    std::printf("visproxy render: %s, %dx%d, %s visibility, %d spp x %d shadow rays, seed %llu: %.2f s, %llu shadow rays "
+                "(%.2f exact and %.2f proxy tests per shadow ray)\n  %s\n  %s\n  %s\n",
+                o->scene.string().c_str(), scene.camera.width, scene.camera.height,
+                std::string(visibility_mode_name(o->visibility)).c_str(), result.stats.passes, o->shadow_rays,
+                static_cast<unsigned long long>(o->seed), result.stats.seconds,
+                static_cast<unsigned long long>(result.stats.shadow_rays),
+                result.stats.to_json()["exact_tests_per_shadow_ray"].get<double>(),
+                result.stats.to_json()["proxy_tests_per_shadow_ray"].get<double>(), o->output.string().c_str(),
+                png.string().c_str(), stats.string().c_str());
+    exit_code = all_finite(result.image) ? kSuccess : kInternalError;
+    if (exit_code != kSuccess) std::cerr << "visproxy render: the image holds NaN or infinite values\n";
+  });
+}
+
+}  // namespace visproxy::cli

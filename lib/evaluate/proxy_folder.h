@@ -1,0 +1,42 @@
+#pragma once
+// A proxy folder written by `visproxy build`, read back: the manifest, the mesh it was
+// built from, and each proxy's geometry.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "mesh/sphere_set.h"
+#include "mesh/triangle_mesh.h"
+#include "proxy/build_proxies.h"
+
+namespace visproxy {
+
+/// FOLDER/manifest.json, checked for the fields the commands rely on. Throws IOError when
+/// it cannot be read and InvalidInputError naming it when it is not a visproxy manifest.
+nlohmann::json read_manifest(const std::filesystem::path& folder);
+
+/// Writes FOLDER/manifest.json atomically (two-space indented, newline at the end).
+void write_manifest(const std::filesystem::path& folder, const nlohmann::json& manifest);
+
+/// Reads the mesh at `path` as `visproxy build` did (same welding) and checks it is the
+/// one the manifest describes: same vertex and triangle counts and bounding box. Throws
+/// InvalidInputError naming `path` otherwise.
+TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest);
+
+/// One proxy's geometry: triangles (boxes and meshes) or spheres.
+struct ProxyGeometry {
+  PrimitiveType type = PrimitiveType::triangle;
+  TriangleMesh mesh;            ///< unless spheres
+  std::vector<Sphere> spheres;  ///< sphere proxies
+};
+
+/// Reads the file a manifest entry names (`file`, relative to `folder`). Throws
+/// InvalidInputError naming the file when it is missing, unreadable, or does not hold
+/// what the entry says (primitive type, primitive count).
+ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const nlohmann::json& entry);
+
+/// The entry's kind ("outside", "inside", "general").
+ProxyKind entry_kind(const nlohmann::json& entry);
+
+}  // namespace visproxy

@@ -1,0 +1,56 @@
+#pragma once
+// Shared Embree plumbing for the modules that trace rays (RayScene, the renderer): a
+// device whose errors are thrown as visproxy::Error, and geometry built from visproxy's
+// meshes and sphere sets. Includes Embree's header: for .cpp files only.
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+
+#include "mesh/sphere_set.h"
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+/// An Embree device. Embree reports errors through a callback, which must not throw
+/// through Embree's frames: it records the first error and throw_if_failed() throws it.
+class EmbreeDevice {
+ public:
+  EmbreeDevice();
+  ~EmbreeDevice();
+  EmbreeDevice(const EmbreeDevice&) = delete;
+  EmbreeDevice& operator=(const EmbreeDevice&) = delete;
+
+  RTCDevice get() const { return device_; }
+  void throw_if_failed();
+
+  /// A new scene with high build quality and robust traversal (rays do not slip through
+  /// shared edges); the caller releases it.
+  RTCScene new_scene();
+
+ private:
+  struct ErrorState {
+    std::mutex mutex;
+    std::string message;
+  };
+  static void record(void* user, RTCError code, const char* text);
+  ErrorState errors_;
+  RTCDevice device_ = nullptr;
+};
+
+/// Attaches `mesh` to `scene` as one triangle geometry (vertices rounded to float) with
+/// the given mask; returns its geometry id.
+unsigned attach_triangles(EmbreeDevice& device, RTCScene scene, const TriangleMesh& mesh, unsigned mask = 0xFFFFFFFFu);
+
+/// Attaches `spheres` as solid balls (user geometry intersected in double precision; a
+/// segment that starts or ends inside a ball is blocked). `spheres` must outlive the
+/// scene. For occlusion queries only: rtcIntersect finds no sphere hit.
+unsigned attach_spheres(EmbreeDevice& device, RTCScene scene, std::span<const Sphere> spheres, unsigned mask = 0xFFFFFFFFu);
+
+/// Fills an RTCRay for the open segment from `from` to `to` (tnear 0, tfar 1, all mask bits).
+RTCRay segment_ray(const Vertex& from, const Vertex& to);
+
+}  // namespace visproxy

@@ -1,0 +1,189 @@
+// `visproxy verify`, `measure` and `report` on a real mesh: every claim holds, a proxy
+// edited to let the mesh out fails with its counterexample, figures land in the manifest
+// (and match its schema), reruns are reproducible, bad input gets one line and exit 2,
+// and the HTML report renders in a real browser.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "apps/cli_test_support.h"
+#include "core/files.h"
+#include "mesh/read_mesh.h"
+#include "mesh/write_mesh.h"
+#include "test_meshes.h"
+#include "test_support.h"
+
+namespace visproxy {
+namespace {
+
+using nlohmann::json;
+
+class CliVerifyMeasure : public testing::ScratchFolder {
+ protected:
+  void SetUp() override {
+    ScratchFolder::SetUp();
+    mesh_ = testing::cgal_mesh("knot1.off").string();
+    proxies_ = folder_ / "proxies";
+    const auto result = testing::run_visproxy("build '" + mesh_ + "' -o '" + proxies_.string() +
+                                              "' --proxy aabb --proxy hull --proxy wrap --proxy quadric:256");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+  }
+  json manifest() const { return json::parse(read_file(proxies_ / "manifest.json")); }
+  testing::CommandResult run(const std::string& command, const std::string& extra = "") const {
+    return testing::run_visproxy(command + " '" + mesh_ + "' '" + proxies_.string() + "'" + extra);
+  }
+  std::string mesh_;
+  std::filesystem::path proxies_;
+};
+
+TEST_F(CliVerifyMeasure, EveryClaimHoldsAndIsRecorded) {
+  const auto result = run("verify");
+  ASSERT_EQ(result.exit_code, 0) << result.out << result.err;
+  EXPECT_NE(result.out.find("4 of 4 claims hold"), std::string::npos) << result.out;
+  const json m = manifest();
+  testing::expect_matches_schema(m);
+  for (const json& entry : m.at("proxies")) {
+    SCOPED_TRACE(entry.at("name").get<std::string>());
+    const json& verify = entry.at("verify");
+    EXPECT_TRUE(verify.at("holds").get<bool>());
+    EXPECT_TRUE(verify.at("counterexample").is_null());
+    if (entry.at("kind") == "outside") {
+      EXPECT_EQ(verify.at("claim"), "contains the mesh");
+      EXPECT_GE(verify.at("margin").get<double>(), 0.0);
+    } else {
+      EXPECT_EQ(verify.at("claim"), "none");
+      EXPECT_GT(verify.at("hausdorff_world").get<double>(), 0.0);
+    }
+  }
+  // The wrap keeps a positive distance from the mesh; the hull touches it.
+  EXPECT_GT(m.at("proxies")[2].at("verify").at("margin").get<double>(), 0.0);
+  EXPECT_EQ(m.at("proxies")[1].at("verify").at("margin").get<double>(), 0.0);
+}
+
+// One hull vertex (a vertex of the mesh) pulled towards the centre: that mesh vertex now
+// pokes out of the proxy. For the wrap, one vertex pushed just beneath the mesh's surface:
+// its triangles cross the mesh while every mesh vertex stays inside. Both must fail, naming the proxy and the counterexample.
+TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
+  TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  const BoundingBox box = bounding_box(hull);
+  const Vertex centre = 0.5 * (box.min + box.max);
+  hull.positions[0] = centre + 0.97 * (hull.positions[0] - centre);
+  write_mesh(proxies_ / "hull.ply", hull);
+  // The wrap vertex nearest to a mesh triangle moves just beneath that triangle.
+  const TriangleMesh mesh = read_mesh(mesh_);
+  const Triangle& t = mesh.triangles[100];
+  const Vertex a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
+  const Vertex inside = (a + b + c) / 3 - 1e-3 * box.diagonal() * (b - a).cross(c - a).normalized();
+  TriangleMesh wrap = read_mesh(proxies_ / "wrap.ply", {.weld = Weld::never});
+  std::size_t nearest = 0;
+  for (std::size_t v = 0; v < wrap.positions.size(); ++v)
+    if ((wrap.positions[v] - inside).norm() < (wrap.positions[nearest] - inside).norm()) nearest = v;
+  wrap.positions[nearest] = inside;
+  write_mesh(proxies_ / "wrap.ply", wrap);
+
+  const auto result = run("verify");
+  EXPECT_EQ(result.exit_code, 1) << result.out;
+  EXPECT_NE(result.err.find("hull (outside) fails: mesh vertex"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("is outside the proxy"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("wrap (outside) fails: mesh"), std::string::npos) << result.err;
+  EXPECT_NE(result.out.find("2 of 4 claims hold"), std::string::npos) << result.out;
+  const json m = manifest();
+  EXPECT_FALSE(m.at("proxies")[1].at("verify").at("holds").get<bool>());
+  EXPECT_LT(m.at("proxies")[1].at("verify").at("margin").get<double>(), 0.0);
+  EXPECT_FALSE(m.at("proxies")[2].at("verify").at("holds").get<bool>());
+  EXPECT_TRUE(m.at("proxies")[0].at("verify").at("holds").get<bool>());
+}
+
+TEST_F(CliVerifyMeasure, MeasureRecordsFiguresReproducibly) {
+  const auto first = run("measure", " --rays 40000 --seed 5 --timed-rays 2000");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_NE(first.out.find("40000 isotropic lines (seed 5)"), std::string::npos) << first.out;
+  const json a = manifest();
+  testing::expect_matches_schema(a);
+  for (const json& entry : a.at("proxies")) {
+    SCOPED_TRACE(entry.at("name").get<std::string>());
+    const json& m = entry.at("measure");
+    const auto counts = m.at("counts").get<std::vector<std::uint64_t>>();
+    EXPECT_EQ(counts[0] + counts[1] + counts[2] + counts[3], 40000u);
+    const json& p = m.at("probabilities");
+    EXPECT_NEAR(p.at("p1").get<double>() + p.at("p2").get<double>() + p.at("p3").get<double>(), 1.0, 1e-12);
+    EXPECT_GT(m.at("cost_ns_per_ray").at("mesh").get<double>(), 0.0);
+    if (entry.at("kind") == "outside") {
+      EXPECT_EQ(counts[1], 0u);  // nothing gets past an outside proxy
+      EXPECT_EQ(m.at("f_hit").at("value").get<double>(), 1.0);
+      EXPECT_EQ(p.at("p3").get<double>(), 0.0);
+      EXPECT_GE(m.at("gssa_ratio").at("value").get<double>(), 1.0);
+    }
+  }
+  // Bigger outside proxies let fewer free rays through: aabb < hull < wrap.
+  const auto f_miss = [&](std::size_t i) { return a.at("proxies")[i].at("measure").at("f_miss").at("value").get<double>(); };
+  EXPECT_LT(f_miss(0), f_miss(1));
+  EXPECT_LT(f_miss(1), f_miss(2));
+
+  ASSERT_EQ(run("measure", " --rays 40000 --seed 5 --timed-rays 2000").exit_code, 0);
+  const json b = manifest();
+  for (std::size_t i = 0; i < a.at("proxies").size(); ++i)
+    EXPECT_EQ(a.at("proxies")[i].at("measure").at("counts"), b.at("proxies")[i].at("measure").at("counts"));
+}
+
+TEST_F(CliVerifyMeasure, BadInputGetsOneLineAndExitTwo) {
+  const std::string other = testing::cgal_mesh("knot2.off").string();
+  struct Case {
+    std::string arguments, fragment;
+  };
+  const std::vector<Case> cases = {
+      {"verify '" + other + "' '" + proxies_.string() + "'", "knot2.off: is not the mesh the proxies were built from"},
+      {"measure '" + mesh_ + "' '" + (folder_ / "nowhere").string() + "'", "manifest.json"},
+      {"report '" + folder_.string() + "'", "manifest.json"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.arguments);
+    const auto result = testing::run_visproxy(c.arguments);
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << result.err;
+    EXPECT_NE(result.err.find(c.fragment), std::string::npos) << result.err;
+  }
+  // A proxy file that went missing is named.
+  std::filesystem::remove(proxies_ / "wrap.ply");
+  const auto missing = run("verify");
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("wrap.ply"), std::string::npos) << missing.err;
+}
+
+TEST_F(CliVerifyMeasure, ReportListsEveryProxyAndRendersInABrowser) {
+  ASSERT_EQ(run("verify").exit_code, 0);
+  ASSERT_EQ(run("measure", " --rays 20000 --timed-rays 1000").exit_code, 0);
+  const auto result = testing::run_visproxy("report '" + proxies_.string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string markdown = read_file(proxies_ / "report.md");
+  const std::string svg = read_file(proxies_ / "f_miss.svg");
+  for (const char* name : {"| aabb |", "| hull |", "| wrap |", "| quadric-256 |"})
+    EXPECT_NE(markdown.find(name), std::string::npos) << name;
+  EXPECT_NE(markdown.find("knot1.off"), std::string::npos);
+  EXPECT_EQ(std::count(svg.begin(), svg.end(), '\n') > 0, true);
+  EXPECT_EQ(static_cast<std::size_t>(std::count(svg.begin(), svg.end(), '<') > 0), 1u);
+  std::size_t points = 0;
+  for (std::size_t at = 0; (at = svg.find("<circle cx", at)) != std::string::npos; ++at) ++points;
+  EXPECT_EQ(points, 4u + 3u);  // one per proxy, three in the legend
+
+  const std::string chromium = VISPROXY_CHROMIUM;
+  if (chromium.empty()) GTEST_SKIP() << "chromium not found at configure time (cmake/bootstrap.sh test installs it)";
+  const std::string dom_path = (folder_ / "dom.html").string();
+  const std::string command = "'" + chromium + "' --headless --no-sandbox --disable-gpu --dump-dom 'file://" +
+                              (proxies_ / "report.html").string() + "' > '" + dom_path + "' 2>/dev/null";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  const std::string dom = read_file(dom_path);
+  // The script ran (it marks the table sortable) and the rows are there, as the browser built them.
+  EXPECT_NE(dom.find("data-sortable=\"ready\""), std::string::npos);
+  std::size_t rows = 0;
+  for (std::size_t at = 0; (at = dom.find("<tr>", at)) != std::string::npos; ++at) ++rows;
+  EXPECT_EQ(rows, 1u + 4u);
+  EXPECT_NE(dom.find(">quadric-256<"), std::string::npos);
+  EXPECT_NE(dom.find("<svg"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace visproxy
