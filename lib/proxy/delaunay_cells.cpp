@@ -7,7 +7,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace visproxy {
@@ -32,6 +35,37 @@ Sphere tetrahedron_circumsphere(const Vertex& a, const Vertex& b, const Vertex& 
   const Vertex offset = numerator / determinant;
   if (!offset.allFinite()) return {(a + b + c + d) / 4, 0.0};
   return {a + offset, offset.norm()};
+}
+
+Sphere smallest_enclosing_ball(const Vertex& a, const Vertex& b, const Vertex& c, const Vertex& d) {
+  const std::array<Vertex, 4> points = {a, b, c, d};
+  double scale = 0;
+  for (const Vertex& p : points) scale = std::max(scale, (p - a).norm());
+  Sphere best{(a + b + c + d) / 4, std::numeric_limits<double>::infinity()};
+  auto consider = [&](const Vertex& center) {
+    double radius = 0;
+    for (const Vertex& p : points) radius = std::max(radius, (p - center).norm());
+    radius += 1e-12 * scale;
+    if (center.allFinite() && radius < best.radius) best = {center, radius};
+  };
+  // Two support points: the ball on a segment as diameter.
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j) consider((points[i] + points[j]) / 2);
+  // Three: the circumcircle of a face (its centre in the face's plane).
+  for (std::size_t skip = 0; skip < 4; ++skip) {
+    std::array<Vertex, 3> face;
+    for (std::size_t k = 0, n = 0; k < 4; ++k)
+      if (k != skip) face[n++] = points[k];
+    const Vertex ab = face[1] - face[0], ac = face[2] - face[0];
+    const Vertex normal = ab.cross(ac);
+    const double squared = normal.squaredNorm();
+    if (squared > 0)
+      consider(face[0] + (ac.squaredNorm() * normal.cross(ab) + ab.squaredNorm() * ac.cross(normal)) / (2 * squared));
+  }
+  // Four: the circumsphere.
+  const Sphere circumsphere = tetrahedron_circumsphere(a, b, c, d);
+  if (circumsphere.radius > 0) consider(circumsphere.center);
+  return best;
 }
 
 std::vector<DelaunayCell> delaunay_cells(std::span<const Vertex> points) {

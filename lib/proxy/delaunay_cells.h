@@ -27,4 +27,10 @@ std::vector<DelaunayCell> delaunay_cells(std::span<const Vertex> points);
 /// as centre when the corners are flat to rounding.
 Sphere tetrahedron_circumsphere(const Vertex& a, const Vertex& b, const Vertex& c, const Vertex& d);
 
+/// The smallest ball holding the four points (the circumsphere when its centre is inside
+/// the tetrahedron, otherwise the smallest ball through two or three of them that holds
+/// the rest), in double precision; the radius is enlarged by a relative 1e-12 so that
+/// rounding never leaves a corner outside.
+Sphere smallest_enclosing_ball(const Vertex& a, const Vertex& b, const Vertex& c, const Vertex& d);
+
 }  // namespace visproxy

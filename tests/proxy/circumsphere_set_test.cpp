@@ -8,6 +8,7 @@
 #include "core/errors.h"
 #include "mesh/read_mesh.h"
 #include "proxy/awkward_meshes.h"
+#include "proxy/delaunay_cells.h"
 #include "test_meshes.h"
 #include "verify/containment.h"
 
@@ -61,6 +62,24 @@ TEST(CircumsphereSet, TetgenOnTheKnotGivesOnlyInsideTetrahedra) {
   const CircumsphereSet set = build_circumsphere_set(knot, {.tetrahedra = InnerTetrahedra::tetgen});
   EXPECT_EQ(set.spheres.size(), set.tetrahedra);
   EXPECT_GT(set.spheres.size(), knot.triangles.size());
+}
+
+TEST(SmallestEnclosingBall, CircumsphereWhenItsCentreIsInsideElseFewerSupportPoints) {
+  // Regular tetrahedron: its circumsphere.
+  const Vertex a(1, 1, 1), b(1, -1, -1), c(-1, 1, -1), d(-1, -1, 1);
+  const Sphere regular = smallest_enclosing_ball(a, b, c, d);
+  EXPECT_NEAR(regular.radius, std::sqrt(3.0), 1e-9);
+  EXPECT_NEAR(regular.center.norm(), 0, 1e-12);
+  // A flat tetrahedron (a right triangle and a point just above its inside): the
+  // circumsphere is huge (radius about 240), the smallest ball is on the hypotenuse.
+  const Vertex p(0, 0, 0), q(1, 0, 0), r(0, 1, 0), t(0.4, 0.4, 1e-3);
+  EXPECT_GT(tetrahedron_circumsphere(p, q, r, t).radius, 10.0);
+  const Sphere flat = smallest_enclosing_ball(p, q, r, t);
+  EXPECT_NEAR(flat.radius, std::sqrt(0.5), 1e-3);
+  for (const Vertex& corner : {p, q, r, t}) EXPECT_LE((corner - flat.center).norm(), flat.radius);
+  // A needle: the ball on its longest edge.
+  const Sphere needle = smallest_enclosing_ball({0, 0, 0}, {10, 0, 0}, {5, 0.1, 0}, {5, 0, 0.1});
+  EXPECT_NEAR(needle.radius, 5, 1e-9);
 }
 
 TEST(CircumsphereSet, BadInputsFailClearly) {
