@@ -1,4 +1,5 @@
 // visproxy build MESH -o DIR [--proxy SPEC]... [--per-component] [--weld MODE] [--seed S]
+//                            [--tets tetgen|normals] [--gssa-lines N]
 
 #include <unistd.h>
 
@@ -27,6 +28,8 @@ struct BuildCommandOptions {
   Weld weld = Weld::automatic;
   std::uint64_t seed = 1;
   std::size_t hausdorff_samples = 20000;
+  InnerTetrahedra tets = InnerTetrahedra::normals;
+  std::size_t gssa_lines = 100000;
 };
 
 void print_table(const BuildCommandOptions& options, const ManifestMesh& mesh, const std::vector<BuiltProxy>& proxies,
@@ -36,17 +39,34 @@ void print_table(const BuildCommandOptions& options, const ManifestMesh& mesh, c
               mesh.components == 1 ? "" : "s", mesh.bounds.diagonal());
   std::printf("%-28s %-8s %10s %-9s %9s %12s  %s\n", "name", "kind", "primitives", "type", "build s",
               "Hausdorff %", "file");
+  bool any_spheres = false;
   for (const BuiltProxy& proxy : proxies) {
     const double hausdorff_percent = 100.0 * proxy.error.at("hausdorff_relative").get<double>();
-    std::printf("%-28s %-8s %10zu %-9s %9.3f %12.4f  %s\n", proxy.spec.name().c_str(),
+    const bool spheres = proxy.primitive_type == PrimitiveType::sphere;
+    any_spheres = any_spheres || spheres;
+    std::string gssa;
+    if (spheres) {
+      const auto& ratio = proxy.result.at("gssa_ratio");
+      char upper[32] = "inf";  // null: unbounded
+      if (!ratio.at("upper").is_null()) std::snprintf(upper, sizeof upper, "%.3f", ratio.at("upper").get<double>());
+      char text[96];
+      std::snprintf(text, sizeof text, "  GSSA ratio %.3f [%.3f, %s]", ratio.at("value").get<double>(),
+                    ratio.at("lower").get<double>(), upper);
+      gssa = text;
+    }
+    std::printf("%-28s %-8s %10zu %-9s %9.3f %12.4f  %s%s\n", proxy.name.c_str(),
                 std::string(kind_name(proxy.spec.kind())).c_str(), proxy.primitives,
                 std::string(primitive_type_name(proxy.primitive_type)).c_str(), proxy.build_seconds, hausdorff_percent,
-                (options.folder / (proxy.spec.name() + ".ply")).string().c_str());
+                (options.folder / (proxy.name + (spheres ? ".json" : ".ply"))).string().c_str(), gssa.c_str());
   }
   std::printf("Hausdorff %%: sampled two-sided Hausdorff distance between proxy and mesh, in %% of the bounding-box\n"
               "diagonal (%zu samples per surface, seed %llu). Manifest: %s (%.2f s in all)\n",
               options.hausdorff_samples, static_cast<unsigned long long>(options.seed),
               (options.folder / "manifest.json").string().c_str(), total_seconds);
+  if (any_spheres)
+    std::printf("GSSA ratio: isotropic lines hitting the spheres / lines hitting the mesh (%zu lines, seed %llu, 95 %% "
+                "interval)\n",
+                options.gssa_lines, static_cast<unsigned long long>(options.seed));
 }
 
 }  // namespace
@@ -55,7 +75,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<BuildCommandOptions>();
   CLI::App* command = app.add_subcommand(
       "build",
-      "Build visibility proxies of a mesh: one binary PLY and one OBJ per proxy in DIR, listed in DIR/manifest.json "
+      "Build visibility proxies of a mesh: one binary PLY and one OBJ per proxy (sphere proxies: a JSON sphere set "
+      "and a PLY of their icospheres) in DIR, listed in DIR/manifest.json "
       "(schema: data/schemas/manifest.schema.json) with kind, parameters, primitive count, build time and error.");
   command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl)")->required();
   command->add_option("-o,--output", options->folder, "Output folder (created if missing)")->required();
@@ -63,8 +84,11 @@ void add_build_command(CLI::App& app, int& exit_code) {
                       "Proxy to build (repeatable). aabb, obb, hull, hull:N (convex, at most N faces), wrap, "
                       "wrap:alpha=A,offset=O (relative to the bbox diagonal; defaults 0.05 and 1/600), outer:N "
                       "(non-convex outside mesh, at most N triangles), quadric:N (at most N triangles), cluster:F "
-                      "(cell F x largest bbox extent). Default: aabb obb hull hull:32 wrap outer:512 quadric:512 "
-                      "cluster:0.03");
+                      "(cell F x largest bbox extent), inside:N (N spheres inscribed in a watertight mesh), "
+                      "spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S] (circumsphere set merged to "
+                      "N spheres keeping the GSSA; one proxy per level). Default: aabb obb hull hull:32 wrap outer:512 "
+                      "quadric:512 cluster:0.03 inside:40 spheres:100 (inside:40 is left out, with a note, when the "
+                      "mesh is not watertight)");
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
   const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
@@ -77,6 +101,18 @@ void add_build_command(CLI::App& app, int& exit_code) {
       ->add_option("--hausdorff-samples", options->hausdorff_samples,
                    "Area-uniform samples per surface for the Hausdorff error [default: 20000]")
       ->check(CLI::Range(std::size_t{100}, std::size_t{100'000'000}));
+  const std::map<std::string, InnerTetrahedra> tets_modes{{"normals", InnerTetrahedra::normals},
+                                                          {"tetgen", InnerTetrahedra::tetgen}};
+  command
+      ->add_option("--tets", options->tets,
+                   "How spheres:N finds the tetrahedra inside the mesh: normals (Delaunay of surface samples, "
+                   "inner tetrahedra by the normal criterion; any mesh) or tetgen (TetGen's constrained "
+                   "tetrahedralization; watertight meshes) [default: normals]")
+      ->transform(CLI::CheckedTransformer(tets_modes, CLI::ignore_case));
+  command
+      ->add_option("--gssa-lines", options->gssa_lines,
+                   "Isotropic lines for the GSSA ratio of sphere proxies [default: 100000]")
+      ->check(CLI::Range(std::size_t{1000}, std::size_t{100'000'000}));
 
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
@@ -93,7 +129,13 @@ void add_build_command(CLI::App& app, int& exit_code) {
     BuildOptions build{.per_component = options->per_component,
                        .hausdorff_samples = options->hausdorff_samples,
                        .seed = options->seed,
-                       .on_start = {}};
+                       .on_start = {},
+                       .tets = options->tets,
+                       .gssa_lines = options->gssa_lines,
+                       .skip_inside_unless_watertight = options->proxies.empty(),
+                       .on_skip = [](std::string_view name, std::string_view reason) {
+                         std::cerr << "visproxy build: skipping " << name << ": " << reason << "\n";
+                       }};
     if (::isatty(STDERR_FILENO))
       build.on_start = [](std::string_view name) { std::cerr << "visproxy build: " << name << " ...\n"; };
     const std::vector<BuiltProxy> proxies = build_proxies(mesh, options->mesh, specs, build);

@@ -1,16 +1,26 @@
 #include "proxy/build_proxies.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <optional>
 
 #include "core/errors.h"
+#include "inspect/mesh_report.h"
+#include "measure/proxy_measurement.h"
+#include "measure/random_lines.h"
 #include "mesh/mesh_topology.h"
 #include "proxy/alpha_wrap.h"
 #include "proxy/bounded_hull.h"
 #include "proxy/convex_hull.h"
+#include "proxy/inscribed_spheres.h"
+#include "proxy/merge_spheres.h"
 #include "proxy/outer_hull.h"
 #include "proxy/quadric_simplify.h"
 #include "proxy/surface_distance.h"
 #include "proxy/vertex_clustering.h"
+#include "proxy/watertight_input.h"
+#include "trace/ray_scene.h"
 
 namespace visproxy {
 namespace {
@@ -92,6 +102,8 @@ Piece build_piece(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOp
                       {"max_quadric_error_world", simplified.max_quadric_error_relative * diagonal}};
       break;
     }
+    case ProxyMethod::inscribed_spheres:
+    case ProxyMethod::sphere_set: break;  // build_sphere_levels
     case ProxyMethod::clustering: {
       VertexClusteringResult clustered = cluster_vertices(mesh, {.cell_size_relative = spec.cell_size_relative});
       piece.mesh = std::move(clustered.mesh);
@@ -113,6 +125,9 @@ std::string describe(ProxyMethod method) {
     case ProxyMethod::outer_hull: return "alpha wrap decimated by conservative edge collapses";
     case ProxyMethod::quadric: return "quadric edge collapse";
     case ProxyMethod::clustering: return "vertex clustering";
+    case ProxyMethod::inscribed_spheres:
+      return "maximal inscribed spheres: inner Voronoi poles, greedy volume cover, exact containment check";
+    case ProxyMethod::sphere_set: return "Delaunay circumsphere set merged pairwise keeping the GSSA (occluding spheres)";
   }
   return "";
 }
@@ -133,8 +148,98 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
     case ProxyMethod::clustering:
       return {{"cell_size_relative", spec.cell_size_relative},
               {"cell_size_world", spec.cell_size_relative * (bounds.max - bounds.min).maxCoeff()}};
+    case ProxyMethod::inscribed_spheres: {
+      const InscribedSpheresOptions defaults;
+      return {{"spheres", spec.count},
+              {"margin_relative", defaults.margin_relative},
+              {"margin_world", defaults.margin_relative * diagonal},
+              {"volume_samples", defaults.volume_samples},
+              {"coverage_samples", defaults.coverage_samples}};
+    }
+    case ProxyMethod::sphere_set: return json::object();  // per level, in build_sphere_levels
   }
   return json::object();
+}
+
+std::size_t circumsphere_samples(const ProxySpec& spec) {
+  if (spec.samples > 0) return spec.samples;
+  return std::clamp<std::size_t>(4 * spec.levels.front(), 4000, 2'000'000);
+}
+
+// {value, lower, upper}; an unbounded upper end is null (schema: $defs/interval).
+json interval_json(double value, double lower, double upper) {
+  return {{"value", value}, {"lower", lower}, {"upper", std::isfinite(upper) ? json(upper) : json(nullptr)}};
+}
+
+// The spheres of every level of `spec` (inside:N is one level), built once per component
+// and joined: BuiltProxy objects without the error and the GSSA measurement.
+std::vector<BuiltProxy> build_sphere_levels(const ProxySpec& spec, const std::vector<const TriangleMesh*>& inputs,
+                                            const BuildOptions& options, double diagonal, const BoundingBox& bounds) {
+  const bool inside = spec.method == ProxyMethod::inscribed_spheres;
+  const std::vector<std::size_t> levels = inside ? std::vector<std::size_t>{spec.count} : spec.levels;
+  const std::vector<std::string> names = spec.output_names();
+  std::vector<std::vector<Sphere>> spheres(levels.size());
+  std::vector<json> component_results;
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t c = 0; c < inputs.size(); ++c) {
+    try {
+      if (inside) {
+        const InscribedSpheres built = build_inscribed_spheres(*inputs[c], {.count = spec.count, .seed = options.seed});
+        spheres[0].insert(spheres[0].end(), built.spheres.begin(), built.spheres.end());
+        component_results.push_back(
+            {{"candidates", built.candidates},
+             {"surface_samples", built.surface_samples},
+             {"mesh_volume", built.mesh_volume},
+             {"covered_volume_fraction",
+              interval_json(built.covered_volume_fraction, built.covered_volume_lower, built.covered_volume_upper)},
+             {"coverage_samples", built.coverage_hits.trials},
+             {"coverage_seed", built.coverage_seed},
+             {"min_margin_world", built.min_margin_world},
+             {"spheres_shrunk", built.spheres_shrunk}});
+      } else {
+        const CircumsphereSet set = build_circumsphere_set(
+            *inputs[c], {.tetrahedra = options.tets, .samples = circumsphere_samples(spec), .seed = options.seed});
+        const std::vector<std::vector<Sphere>> merged =
+            merge_spheres(set.spheres, levels, {.pair_distance = spec.pair_distance, .radius = spec.merge_radius});
+        for (std::size_t k = 0; k < levels.size(); ++k) spheres[k].insert(spheres[k].end(), merged[k].begin(), merged[k].end());
+        component_results.push_back(
+            {{"points", set.points}, {"tetrahedra", set.tetrahedra}, {"initial_spheres", set.spheres.size()}});
+      }
+    } catch (const InvalidInputError& error) {
+      const std::string where = inputs.size() > 1 ? " (component " + std::to_string(c) + ")" : "";
+      throw InvalidInputError("", spec.text + where + ": " + error.problem());
+    }
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<BuiltProxy> proxies;
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    BuiltProxy proxy;
+    proxy.spec = spec;
+    proxy.name = names[k];
+    proxy.method = describe(spec.method);
+    proxy.params = params_of(spec, diagonal, bounds);
+    if (!inside)
+      proxy.params = {{"spheres", levels[k]},
+                      {"levels", levels},
+                      {"pair_distance", pair_distance_name(spec.pair_distance)},
+                      {"merge_radius", spec.merge_radius == MergeRadius::exact ? "exact" : "analytic"},
+                      {"samples", circumsphere_samples(spec)},
+                      {"tets", inner_tetrahedra_name(options.tets)}};
+    proxy.primitive_type = PrimitiveType::sphere;
+    proxy.spheres = std::move(spheres[k]);
+    proxy.primitives = proxy.spheres.size();
+    proxy.mesh = sphere_set_mesh(proxy.spheres);
+    proxy.build_seconds = seconds;
+    if (inputs.size() > 1) {
+      proxy.result = {{"components", component_results}};
+    } else {
+      proxy.result = component_results[0];
+    }
+    if (!inside) proxy.result["levels_built_together"] = levels;
+    proxies.push_back(std::move(proxy));
+  }
+  return proxies;
 }
 
 }  // namespace
@@ -163,11 +268,67 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
     return pointers;
   }();
 
+  // Sampled Hausdorff distance between the proxy's triangles and the mesh; sphere proxies
+  // are measured as icospheres subdivided once (42 vertices each: a sphere set's error is
+  // about its shape, not about the 0.4 % by which finer icospheres approach each sphere).
+  auto measure_error = [&](BuiltProxy& proxy) {
+    const SurfaceDistance distance = sampled_hausdorff_distance(
+        proxy.primitive_type == PrimitiveType::sphere ? sphere_set_mesh(proxy.spheres, 1) : proxy.mesh, mesh,
+        {.samples_per_mesh = options.hausdorff_samples, .seed = options.seed});
+    proxy.error = {{"hausdorff_relative", diagonal > 0 ? distance.hausdorff_world() / diagonal : 0.0},
+                   {"hausdorff_world", distance.hausdorff_world()},
+                   {"proxy_to_mesh_world", distance.a_to_b_world},
+                   {"mesh_to_proxy_world", distance.b_to_a_world},
+                   {"samples_per_surface", options.hausdorff_samples},
+                   {"seed", options.seed}};
+  };
+  // Isotropic lines against the mesh, traced once for every sphere proxy.
+  std::optional<ReferenceRays> reference;
+  auto measure_gssa = [&](BuiltProxy& proxy) {
+    if (!reference) {
+      const RayScene scene(mesh);
+      reference = trace_reference(scene, isotropic_lines(bounding_sphere(mesh), options.gssa_lines, options.seed),
+                                  {.rays = 0, .repeats = 0});
+    }
+    const RayScene spheres(proxy.spheres);
+    const std::vector<std::uint8_t> blocked = spheres.segments_blocked(reference->rays);
+    RayTypeCounts counts;
+    for (std::size_t i = 0; i < blocked.size(); ++i) counts.add(reference->mesh_blocked[i] != 0, blocked[i] != 0);
+    const ProxyMeasurement measured = measure_from_counts(counts, proxy.spec.kind());
+    proxy.result["gssa_ratio"] = interval_json(measured.gssa_ratio, measured.gssa_ratio_lower, measured.gssa_ratio_upper);
+    proxy.result["gssa_lines"] = options.gssa_lines;
+    proxy.result["gssa_seed"] = options.seed;
+    if (proxy.spec.kind() == ProxyKind::inside) proxy.result["lines_hitting_spheres_not_mesh"] = counts.counts[2];
+  };
+
   std::vector<BuiltProxy> proxies;
   for (const ProxySpec& spec : specs) {
+    if (spec.method == ProxyMethod::inscribed_spheres || spec.method == ProxyMethod::sphere_set) {
+      if (options.on_start) options.on_start(spec.name());
+      if (spec.method == ProxyMethod::inscribed_spheres && options.skip_inside_unless_watertight) {
+        if (const std::optional<std::string> defects = watertight_defects(inspect_mesh(mesh))) {
+          if (options.on_skip)
+            options.on_skip(spec.name(), "the mesh is not watertight (" + *defects + "): an inside proxy needs one");
+          continue;
+        }
+      }
+      std::vector<BuiltProxy> levels;
+      try {
+        levels = build_sphere_levels(spec, inputs, options, diagonal, bounds);
+      } catch (const InvalidInputError& error) {
+        throw InvalidInputError(source, error.problem());
+      }
+      for (BuiltProxy& proxy : levels) {
+        measure_gssa(proxy);
+        measure_error(proxy);
+        proxies.push_back(std::move(proxy));
+      }
+      continue;
+    }
     if (options.on_start) options.on_start(spec.name());
     BuiltProxy proxy;
     proxy.spec = spec;
+    proxy.name = spec.name();
     proxy.method = describe(spec.method);
     proxy.params = params_of(spec, diagonal, bounds);
     proxy.primitive_type = spec.method == ProxyMethod::aabb || spec.method == ProxyMethod::obb ? PrimitiveType::box
@@ -203,15 +364,7 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       for (const OrientedBox& box : proxy.boxes) boxes.push_back(box_json(box));
       proxy.result["boxes"] = boxes;
     }
-
-    const SurfaceDistance distance = sampled_hausdorff_distance(
-        proxy.mesh, mesh, {.samples_per_mesh = options.hausdorff_samples, .seed = options.seed});
-    proxy.error = {{"hausdorff_relative", diagonal > 0 ? distance.hausdorff_world() / diagonal : 0.0},
-                   {"hausdorff_world", distance.hausdorff_world()},
-                   {"proxy_to_mesh_world", distance.a_to_b_world},
-                   {"mesh_to_proxy_world", distance.b_to_a_world},
-                   {"samples_per_surface", options.hausdorff_samples},
-                   {"seed", options.seed}};
+    measure_error(proxy);
     proxies.push_back(std::move(proxy));
   }
   return proxies;

@@ -10,8 +10,10 @@
 #include <string_view>
 #include <vector>
 
+#include "mesh/sphere_set.h"
 #include "mesh/triangle_mesh.h"
 #include "proxy/bounding_boxes.h"
+#include "proxy/circumsphere_set.h"
 #include "proxy/proxy_spec.h"
 
 namespace visproxy {
@@ -21,13 +23,17 @@ std::string_view primitive_type_name(PrimitiveType type);
 
 struct BuiltProxy {
   ProxySpec spec;
+  std::string name;       ///< the file and manifest name: spec.name(), or "spheres-N" for each level
   std::string method;     ///< how it was made, in words ("CGAL 3D alpha wrap")
   nlohmann::json params;  ///< parameters as applied, relative and in mesh units
   PrimitiveType primitive_type = PrimitiveType::triangle;
   std::size_t primitives = 0;      ///< boxes, triangles or spheres
-  TriangleMesh mesh;               ///< the proxy as triangles (boxes as their 12 triangles)
+  TriangleMesh mesh;               ///< the proxy as triangles (boxes as their 12 triangles, spheres as icospheres)
   std::vector<OrientedBox> boxes;  ///< box proxies: one per component
-  double build_seconds = 0;        ///< wall time of the builder alone (not of the error measurement)
+  std::vector<Sphere> spheres;     ///< sphere proxies
+  /// Wall time of the builder alone (not of the error measurement); the levels of one
+  /// spheres spec are built in one pass and each reports the time of the whole pass.
+  double build_seconds = 0;
   nlohmann::json result;           ///< what the builder reached: bounds, volumes, per-component figures
   nlohmann::json error;            ///< sampled two-sided Hausdorff distance to the mesh
 };
@@ -40,11 +46,21 @@ struct BuildOptions {
   std::uint64_t seed = 1;                 ///< seeds the error's samples and CGAL's box search
   /// Called before each proxy is built with its name (progress display); may be empty.
   std::function<void(std::string_view)> on_start;
+  /// How spheres:N finds the tetrahedra inside the mesh (circumsphere_set.h).
+  InnerTetrahedra tets = InnerTetrahedra::normals;
+  /// Isotropic lines (seeded by `seed`) for the GSSA ratio of sphere proxies.
+  std::size_t gssa_lines = 100000;
+  /// When the mesh is not watertight, leave out inside:N (calling on_skip with its name and
+  /// the reason) instead of failing: for the default set, which holds inside:40.
+  bool skip_inside_unless_watertight = false;
+  std::function<void(std::string_view name, std::string_view reason)> on_skip = {};
 };
 
-/// Builds every spec for `mesh`, in order. `source` names the mesh in error messages:
-/// input a builder cannot handle (no triangles, collinear vertices, ...) throws
-/// InvalidInputError("SOURCE", "SPEC: problem").
+/// Builds every spec for `mesh`, in order (a spheres spec gives one proxy per level).
+/// `source` names the mesh in error messages: input a builder cannot handle (no
+/// triangles, collinear vertices, not watertight for inside:N, ...) throws
+/// InvalidInputError("SOURCE", "SPEC: problem"). Sphere proxies' results hold the GSSA
+/// ratio of the set to the mesh over options.gssa_lines isotropic lines (95 % interval).
 std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::filesystem::path& source,
                                       std::span<const ProxySpec> specs, const BuildOptions& options = {});
 

@@ -4,6 +4,7 @@
 
 #include "core/errors.h"
 #include "core/files.h"
+#include "mesh/sphere_set.h"
 #include "mesh/write_mesh.h"
 
 namespace visproxy {
@@ -16,7 +17,7 @@ json to_json(const Vertex& v) { return json::array({v.x(), v.y(), v.z()}); }
 }  // namespace
 
 json manifest_entry(const BuiltProxy& proxy) {
-  return {{"name", proxy.spec.name()},
+  return {{"name", proxy.name.empty() ? proxy.spec.name() : proxy.name},
           {"spec", proxy.spec.text},
           {"kind", kind_name(proxy.spec.kind())},
           {"method", proxy.method},
@@ -38,12 +39,20 @@ json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh&
 
   json entries = json::array();
   for (const BuiltProxy& proxy : proxies) {
-    const std::string name = proxy.spec.name();
-    write_mesh(folder / (name + ".ply"), proxy.mesh);
-    write_mesh(folder / (name + ".obj"), proxy.mesh);
     json entry = manifest_entry(proxy);
-    entry["file"] = name + ".ply";
-    entry["files"] = json::array({name + ".ply", name + ".obj"});
+    const std::string name = entry.at("name");
+    if (proxy.primitive_type == PrimitiveType::sphere) {
+      // The spheres themselves, and their icospheres for looking at them.
+      write_sphere_set(folder / (name + ".json"), proxy.spheres);
+      write_mesh(folder / (name + ".ply"), proxy.mesh);
+      entry["file"] = name + ".json";
+      entry["files"] = json::array({name + ".json", name + ".ply"});
+    } else {
+      write_mesh(folder / (name + ".ply"), proxy.mesh);
+      write_mesh(folder / (name + ".obj"), proxy.mesh);
+      entry["file"] = name + ".ply";
+      entry["files"] = json::array({name + ".ply", name + ".obj"});
+    }
     entries.push_back(std::move(entry));
   }
   const json manifest = {
@@ -60,6 +69,8 @@ json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh&
       {"options",
        {{"per_component", options.per_component},
         {"hausdorff_samples", options.hausdorff_samples},
+        {"tets", inner_tetrahedra_name(options.tets)},
+        {"gssa_lines", options.gssa_lines},
         {"seed", options.seed}}},
       {"proxies", entries}};
   write_file_atomically(folder / "manifest.json", manifest.dump(2) + "\n");

@@ -1,5 +1,6 @@
 #include "proxy/proxy_spec.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -34,17 +35,26 @@ double parse_fraction(std::string_view spec, std::string_view what, std::string_
 
 }  // namespace
 
-std::string ProxySpec::name() const {
+std::string ProxySpec::name() const { return output_names().front(); }
+
+std::vector<std::string> ProxySpec::output_names() const {
+  if (method == ProxyMethod::sphere_set) {
+    std::vector<std::string> names;
+    for (const std::size_t level : levels) names.push_back("spheres-" + std::to_string(level));
+    return names;
+  }
   std::string name = text;
   for (char& c : name)
     if (c == ':' || c == ',') c = '-';
-  return name;
+  return {name};
 }
 
 ProxyKind ProxySpec::kind() const {
   switch (method) {
     case ProxyMethod::quadric:
-    case ProxyMethod::clustering: return ProxyKind::general;
+    case ProxyMethod::clustering:
+    case ProxyMethod::sphere_set: return ProxyKind::general;
+    case ProxyMethod::inscribed_spheres: return ProxyKind::inside;
     default: return ProxyKind::outside;
   }
 }
@@ -110,15 +120,55 @@ ProxySpec parse_proxy_spec(std::string_view text) {
     require_argument("cluster:F");
     spec.method = ProxyMethod::clustering;
     spec.cell_size_relative = parse_fraction(text, "F", argument);
+  } else if (method == "inside") {
+    require_argument("inside:N");
+    spec.method = ProxyMethod::inscribed_spheres;
+    spec.count = parse_count(text, argument);
+  } else if (method == "spheres") {
+    require_argument("spheres:N[,N2,...]");
+    spec.method = ProxyMethod::sphere_set;
+    std::set<std::string_view> seen;
+    std::string_view rest = argument;
+    while (true) {
+      const std::size_t comma = rest.find(',');
+      const std::string_view item = rest.substr(0, comma);
+      const std::size_t equals = item.find('=');
+      if (equals == std::string_view::npos) {
+        spec.levels.push_back(parse_count(text, item));
+      } else {
+        const std::string_view key = item.substr(0, equals);
+        const std::string_view value = item.substr(equals + 1);
+        if (!seen.insert(key).second) fail(text, "'" + std::string(key) + "' given twice");
+        if (key == "pair" && (value == "d1" || value == "d2")) {
+          spec.pair_distance = value == "d1" ? PairDistance::d1 : PairDistance::d2;
+        } else if (key == "merge" && (value == "exact" || value == "analytic")) {
+          spec.merge_radius = value == "exact" ? MergeRadius::exact : MergeRadius::analytic;
+        } else if (key == "samples") {
+          spec.samples = parse_count(text, value);
+          if (spec.samples < 4) fail(text, "samples must be at least 4 (one tetrahedron)");
+        } else {
+          fail(text, "unknown spheres parameter '" + std::string(item) +
+                         "' (expected pair=d1|d2, merge=exact|analytic, samples=S)");
+        }
+      }
+      if (comma == std::string_view::npos) break;
+      rest = rest.substr(comma + 1);
+    }
+    if (spec.levels.empty()) fail(text, "expected spheres:N[,N2,...]: at least one sphere count");
+    std::sort(spec.levels.begin(), spec.levels.end(), std::greater<>());
+    if (std::adjacent_find(spec.levels.begin(), spec.levels.end()) != spec.levels.end())
+      fail(text, "a sphere count is given twice");
   } else {
     fail(text, "unknown proxy '" + std::string(method) +
-                   "' (expected aabb, obb, hull, hull:N, wrap, wrap:alpha=A,offset=O, outer:N, quadric:N, cluster:F)");
+                   "' (expected aabb, obb, hull, hull:N, wrap, wrap:alpha=A,offset=O, outer:N, quadric:N, cluster:F, "
+                   "inside:N, spheres:N[,N2,...])");
   }
   return spec;
 }
 
 std::vector<ProxySpec> default_proxy_specs() {
-  return parse_proxy_specs({"aabb", "obb", "hull", "hull:32", "wrap", "outer:512", "quadric:512", "cluster:0.03"});
+  return parse_proxy_specs(
+      {"aabb", "obb", "hull", "hull:32", "wrap", "outer:512", "quadric:512", "cluster:0.03", "inside:40", "spheres:100"});
 }
 
 std::vector<ProxySpec> parse_proxy_specs(const std::vector<std::string>& texts) {
@@ -126,7 +176,8 @@ std::vector<ProxySpec> parse_proxy_specs(const std::vector<std::string>& texts) 
   std::set<std::string> names;
   for (const std::string& text : texts) {
     ProxySpec spec = parse_proxy_spec(text);
-    if (!names.insert(spec.name()).second) fail(text, "the proxy '" + spec.name() + "' is asked for twice");
+    for (const std::string& name : spec.output_names())
+      if (!names.insert(name).second) fail(text, "the proxy '" + name + "' is asked for twice");
     specs.push_back(std::move(spec));
   }
   return specs;

@@ -10,6 +10,14 @@
 //   outer:N              non-convex outside mesh, at most N triangles (outside)
 //   quadric:N            quadric edge collapse to at most N triangles (general)
 //   cluster:F            vertex clustering, cell F x largest bbox extent (general)
+//   inside:N             N maximal spheres inscribed in a watertight mesh (inside)
+//   spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S]
+//                        Delaunay circumsphere set merged to N (and N2, ...) spheres, all
+//                        levels in one pass, one proxy each named spheres-N (general).
+//                        pair: pair distance D1 = d or D2 = d + r - R (default d2); merge:
+//                        the GSSA each merge keeps, exact (default) or the paper's analytic
+//                        overestimates; samples: surface samples triangulated (default
+//                        max(4000, 4 x largest N)).
 
 #include <cstddef>
 #include <string>
@@ -17,11 +25,22 @@
 #include <vector>
 
 #include "core/proxy_kind.h"
+#include "proxy/merge_spheres.h"
 
 namespace visproxy {
 
-
-enum class ProxyMethod { aabb, obb, convex_hull, bounded_hull, alpha_wrap, outer_hull, quadric, clustering };
+enum class ProxyMethod {
+  aabb,
+  obb,
+  convex_hull,
+  bounded_hull,
+  alpha_wrap,
+  outer_hull,
+  quadric,
+  clustering,
+  inscribed_spheres,
+  sphere_set
+};
 
 /// Defaults of `wrap` (CGAL's recommended relative alpha 20 and offset 600), as fractions
 /// of the input's bounding-box diagonal.
@@ -31,13 +50,20 @@ inline constexpr double kDefaultWrapOffsetRelative = 1.0 / 600;
 struct ProxySpec {
   ProxyMethod method = ProxyMethod::aabb;
   std::string text;               ///< the spec as given, e.g. "hull:32"
-  std::size_t count = 0;          ///< N of hull:N, outer:N, quadric:N
+  std::size_t count = 0;          ///< N of hull:N, outer:N, quadric:N, inside:N
   double cell_size_relative = 0;  ///< F of cluster:F
   double alpha_relative = kDefaultWrapAlphaRelative;    ///< wrap
   double offset_relative = kDefaultWrapOffsetRelative;  ///< wrap
+  std::vector<std::size_t> levels;  ///< spheres: sphere counts, largest first
+  PairDistance pair_distance = PairDistance::d2;  ///< spheres
+  MergeRadius merge_radius = MergeRadius::exact;  ///< spheres
+  std::size_t samples = 0;  ///< spheres: surface samples, 0 for max(4000, 4 x levels[0])
 
-  /// The file and manifest name: the spec with ':' and ',' turned into '-' ("hull-32").
+  /// The file and manifest name: the spec with ':' and ',' turned into '-' ("hull-32");
+  /// spheres: "spheres-N" of the first (largest) level.
   std::string name() const;
+  /// Every proxy the spec makes, by name: one, except spheres: "spheres-N" per level.
+  std::vector<std::string> output_names() const;
   ProxyKind kind() const;
 };
 
@@ -46,10 +72,10 @@ struct ProxySpec {
 ProxySpec parse_proxy_spec(std::string_view text);
 
 /// The set `visproxy build` makes when no --proxy is given:
-/// aabb, obb, hull, hull:32, wrap, outer:512, quadric:512, cluster:0.03.
+/// aabb, obb, hull, hull:32, wrap, outer:512, quadric:512, cluster:0.03, inside:40, spheres:100.
 std::vector<ProxySpec> default_proxy_specs();
 
-/// Parses every spec and rejects two specs with the same name.
+/// Parses every spec and rejects two specs that make a proxy of the same name.
 std::vector<ProxySpec> parse_proxy_specs(const std::vector<std::string>& texts);
 
 }  // namespace visproxy

@@ -12,7 +12,9 @@
 #include "mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
+#include "mesh/sphere_set.h"
 #include "verify/containment.h"
+#include "verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {
@@ -25,7 +27,7 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
   const auto mesh_path = testing::cgal_mesh("knot1.off");
   const auto result = testing::run_visproxy("build '" + mesh_path.string() + "' -o '" + folder_.string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_NE(result.out.find("8 proxies of"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("10 proxies of"), std::string::npos) << result.out;
   EXPECT_NE(result.out.find("outer-512"), std::string::npos) << result.out;
 
   const json manifest = json::parse(read_file(folder_ / "manifest.json"));
@@ -38,6 +40,15 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
     const std::string name = entry.at("name");
     SCOPED_TRACE(name);
     names.push_back(name);
+    if (entry.at("primitive_type") == "sphere") {
+      const std::vector<Sphere> spheres = read_sphere_set(folder_ / entry.at("file").get<std::string>());
+      EXPECT_EQ(entry.at("primitives").get<std::size_t>(), spheres.size());
+      EXPECT_EQ(read_mesh(folder_ / (name + ".ply")), sphere_set_mesh(spheres));
+      if (entry.at("kind") == "inside") {
+        EXPECT_TRUE(check_spheres_inside(mesh, spheres).contained());
+      }
+      continue;
+    }
     const TriangleMesh proxy = read_mesh(folder_ / entry.at("file").get<std::string>());
     EXPECT_EQ(read_mesh(folder_ / (name + ".obj")), proxy);
     EXPECT_EQ(entry.at("triangles").get<std::size_t>(), proxy.triangles.size());
@@ -55,7 +66,7 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
     EXPECT_GE(entry.at("error").at("hausdorff_relative").get<double>(), 0.0);
   }
   EXPECT_EQ(names, (std::vector<std::string>{"aabb", "obb", "hull", "hull-32", "wrap", "outer-512", "quadric-512",
-                                             "cluster-0.03"}));
+                                             "cluster-0.03", "inside-40", "spheres-100"}));
   const json& entries = manifest.at("proxies");
   EXPECT_LE(entries[3].at("result").at("faces").get<int>(), 32);
   EXPECT_LE(entries[6].at("triangles").get<int>(), 512);
@@ -66,7 +77,9 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
 
 TEST_F(CliBuild, SameInputAndOptionsGiveByteIdenticalFiles) {
   const auto mesh_path = testing::cgal_mesh("knot2.off");
-  const std::string proxies = " --proxy obb --proxy hull:18 --proxy wrap --proxy outer:128 --proxy quadric:256 --proxy cluster:0.05";
+  const std::string proxies =
+      " --proxy obb --proxy hull:18 --proxy wrap --proxy outer:128 --proxy quadric:256 --proxy cluster:0.05"
+      " --proxy spheres:50,10 --proxy inside:5";
   for (const char* run : {"a", "b"}) {
     const auto result = testing::run_visproxy("build '" + mesh_path.string() + "' -o '" + (folder_ / run).string() + "'" + proxies);
     ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -77,7 +90,7 @@ TEST_F(CliBuild, SameInputAndOptionsGiveByteIdenticalFiles) {
     EXPECT_EQ(read_file(file.path()), read_file(folder_ / "b" / file.path().filename())) << file.path();
     ++compared;
   }
-  EXPECT_EQ(compared, 12u);
+  EXPECT_EQ(compared, 18u);
 }
 
 TEST_F(CliBuild, BadSpecOrBadMeshFailsWithOneLineAndWritesNothing) {
@@ -90,7 +103,17 @@ TEST_F(CliBuild, BadSpecOrBadMeshFailsWithOneLineAndWritesNothing) {
   std::ofstream(folder_ / "line.obj") << "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n";
   const std::vector<Case> cases = {
       {"'" + knot + "' -o '" + out.string() + "' --proxy hull:2", "--proxy 'hull:2'"},
-      {"'" + knot + "' -o '" + out.string() + "' --proxy spheres", "unknown proxy"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy sphere", "unknown proxy"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy spheres", "expected spheres:N"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy inside:0", "at least 1"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy spheres:100,pair=d3", "unknown spheres parameter"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy spheres:100,25 --proxy spheres:25", "asked for twice"},
+      {"'" + knot + "' -o '" + out.string() + "' --proxy spheres:100 --tets voronoi", "--tets"},
+      {"'" + testing::cgal_mesh("elephant-with-holes.off").string() + "' -o '" + out.string() + "' --proxy inside:40",
+       "inside:40: the mesh is not watertight (1353 boundary edges"},
+      {"'" + testing::cgal_mesh("elephant-with-holes.off").string() + "' -o '" + out.string() +
+           "' --proxy spheres:100 --tets tetgen",
+       "--tets normals"},
       {"'" + knot + "' -o '" + out.string() + "' --proxy aabb --proxy aabb", "asked for twice"},
       {"'" + (folder_ / "missing.off").string() + "' -o '" + out.string() + "'", "missing.off"},
       {"'" + testing::cgal_mesh("b9.ply").string() + "' -o '" + out.string() + "'", "b9.ply: contains no faces"},
@@ -106,6 +129,79 @@ TEST_F(CliBuild, BadSpecOrBadMeshFailsWithOneLineAndWritesNothing) {
     EXPECT_NE(result.err.find(c.fragment), std::string::npos) << result.err;
     EXPECT_FALSE(std::filesystem::exists(out));
   }
+}
+
+TEST_F(CliBuild, SphereLevelsAndInsideSpheresWriteJsonAndPlyDescribedByTheSchema) {
+  const auto mesh_path = testing::cgal_mesh("knot1.off");
+  const auto result = testing::run_visproxy("build '" + mesh_path.string() + "' -o '" + folder_.string() +
+                                            "' --proxy spheres:25,250,pair=d1 --proxy inside:10");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_TRUE(result.err.empty()) << result.err;
+  EXPECT_NE(result.out.find("GSSA ratio"), std::string::npos) << result.out;
+  const json manifest = json::parse(read_file(folder_ / "manifest.json"));
+  testing::expect_matches_schema(manifest);
+  EXPECT_EQ(manifest.at("options").at("tets"), "normals");
+  const json result_schema = testing::manifest_schema().at("properties").at("proxies").at("items").at("properties").at("result");
+  const TriangleMesh mesh = read_mesh(mesh_path);
+  std::vector<std::string> names;
+  for (const json& entry : manifest.at("proxies")) {
+    const std::string name = entry.at("name");
+    SCOPED_TRACE(name);
+    names.push_back(name);
+    for (const auto& [key, value] : entry.at("result").items())
+      EXPECT_TRUE(result_schema.at("properties").contains(key)) << "result." << key;
+    EXPECT_EQ(entry.at("primitive_type"), "sphere");
+    EXPECT_EQ(entry.at("file"), name + ".json");
+    EXPECT_EQ(entry.at("files"), json::array({name + ".json", name + ".ply"}));
+    EXPECT_FALSE(std::filesystem::exists(folder_ / (name + ".obj")));
+    const std::vector<Sphere> spheres = read_sphere_set(folder_ / (name + ".json"));
+    EXPECT_EQ(entry.at("primitives").get<std::size_t>(), spheres.size());
+    const TriangleMesh icospheres = read_mesh(folder_ / (name + ".ply"));
+    EXPECT_EQ(entry.at("triangles").get<std::size_t>(), icospheres.triangles.size());
+    const json& ratio = entry.at("result").at("gssa_ratio");
+    EXPECT_LE(ratio.at("lower").get<double>(), ratio.at("value").get<double>());
+    EXPECT_GE(ratio.at("upper").get<double>(), ratio.at("value").get<double>());
+    EXPECT_EQ(entry.at("result").at("gssa_lines"), 100000);
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"spheres-250", "spheres-25", "inside-10"}));
+  const json& entries = manifest.at("proxies");
+  EXPECT_EQ(entries[0].at("primitives"), 250);
+  EXPECT_EQ(entries[1].at("primitives"), 25);
+  EXPECT_EQ(entries[0].at("spec"), "spheres:25,250,pair=d1");
+  EXPECT_EQ(entries[0].at("params").at("pair_distance"), "d1");
+  EXPECT_EQ(entries[0].at("build_seconds"), entries[1].at("build_seconds"));  // one pass
+  EXPECT_EQ(entries[2].at("kind"), "inside");
+  EXPECT_EQ(entries[2].at("primitives"), 10);
+  EXPECT_EQ(entries[2].at("result").at("lines_hitting_spheres_not_mesh"), 0);
+  EXPECT_LT(entries[2].at("result").at("gssa_ratio").at("value").get<double>(), 1.0);
+  EXPECT_GT(entries[2].at("result").at("covered_volume_fraction").at("value").get<double>(), 0.2);  // 10 balls in a knot
+  EXPECT_TRUE(check_spheres_inside(mesh, read_sphere_set(folder_ / "inside-10.json")).contained());
+}
+
+TEST_F(CliBuild, TetgenTetrahedraOnAWatertightMesh) {
+  const auto result = testing::run_visproxy("build '" + testing::cgal_mesh("knot1.off").string() + "' -o '" +
+                                            folder_.string() + "' --proxy spheres:100 --tets tetgen");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const json manifest = json::parse(read_file(folder_ / "manifest.json"));
+  EXPECT_EQ(manifest.at("options").at("tets"), "tetgen");
+  const json& entry = manifest.at("proxies").at(0);
+  EXPECT_EQ(entry.at("params").at("tets"), "tetgen");
+  EXPECT_EQ(entry.at("result").at("initial_spheres"), entry.at("result").at("tetrahedra"));
+  EXPECT_EQ(read_sphere_set(folder_ / "spheres-100.json").size(), 100u);
+}
+
+TEST_F(CliBuild, DefaultSetOnAMeshWithHolesLeavesOutInsideWithOneNote) {
+  const auto result = testing::run_visproxy("build '" + testing::cgal_mesh("elephant-with-holes.off").string() + "' -o '" +
+                                            folder_.string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.err,
+            "visproxy build: skipping inside-40: the mesh is not watertight (1353 boundary edges, 173 "
+            "self-intersecting triangle pairs): an inside proxy needs one\n");
+  EXPECT_NE(result.out.find("9 proxies of"), std::string::npos) << result.out;
+  const json manifest = json::parse(read_file(folder_ / "manifest.json"));
+  for (const json& entry : manifest.at("proxies")) EXPECT_NE(entry.at("name"), "inside-40");
+  EXPECT_EQ(manifest.at("proxies").back().at("name"), "spheres-100");
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "inside-40.json"));
 }
 
 }  // namespace

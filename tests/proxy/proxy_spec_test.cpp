@@ -45,7 +45,37 @@ TEST(ProxySpec, DefaultSetIsThePapersSet) {
   std::vector<std::string> names;
   for (const ProxySpec& spec : default_proxy_specs()) names.push_back(spec.name());
   EXPECT_EQ(names, (std::vector<std::string>{"aabb", "obb", "hull", "hull-32", "wrap", "outer-512", "quadric-512",
-                                             "cluster-0.03"}));
+                                             "cluster-0.03", "inside-40", "spheres-100"}));
+}
+
+TEST(ProxySpec, SphereSpecsNameEveryLevel) {
+  const ProxySpec inside = parse_proxy_spec("inside:40");
+  EXPECT_EQ(inside.method, ProxyMethod::inscribed_spheres);
+  EXPECT_EQ(inside.count, 40u);
+  EXPECT_EQ(inside.kind(), ProxyKind::inside);
+  EXPECT_EQ(inside.output_names(), std::vector<std::string>{"inside-40"});
+
+  const ProxySpec levels = parse_proxy_spec("spheres:100,1000,10,25,250");
+  EXPECT_EQ(levels.method, ProxyMethod::sphere_set);
+  EXPECT_EQ(levels.kind(), ProxyKind::general);
+  EXPECT_EQ(levels.levels, (std::vector<std::size_t>{1000, 250, 100, 25, 10}));
+  EXPECT_EQ(levels.output_names(),
+            (std::vector<std::string>{"spheres-1000", "spheres-250", "spheres-100", "spheres-25", "spheres-10"}));
+  EXPECT_EQ(levels.name(), "spheres-1000");
+  EXPECT_EQ(levels.pair_distance, PairDistance::d2);
+  EXPECT_EQ(levels.merge_radius, MergeRadius::exact);
+  EXPECT_EQ(levels.samples, 0u);
+
+  const ProxySpec options = parse_proxy_spec("spheres:100,pair=d1,merge=analytic,samples=20000");
+  EXPECT_EQ(options.levels, std::vector<std::size_t>{100});
+  EXPECT_EQ(options.pair_distance, PairDistance::d1);
+  EXPECT_EQ(options.merge_radius, MergeRadius::analytic);
+  EXPECT_EQ(options.samples, 20000u);
+  EXPECT_EQ(options.name(), "spheres-100");
+
+  // Levels of different specs share one name space.
+  EXPECT_THROW(parse_proxy_specs({"spheres:100,10", "spheres:10,pair=d1"}), Error);
+  EXPECT_EQ(parse_proxy_specs({"spheres:100", "spheres:10,pair=d1", "inside:10"}).size(), 3u);
 }
 
 class BadProxySpec : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
@@ -74,7 +104,14 @@ INSTANTIATE_TEST_SUITE_P(
                       std::pair{"cluster:nan", "must be a number"}, std::pair{"cluster:2", "(0, 1]"},
                       std::pair{"wrap:alpha", "expected alpha=A"}, std::pair{"wrap:beta=1", "unknown wrap parameter"},
                       std::pair{"wrap:alpha=0.1,alpha=0.2", "given twice"}, std::pair{"wrap:offset=-1", "(0, 1]"},
-                      std::pair{"quadric:999999999999", "at most"}));
+                      std::pair{"quadric:999999999999", "at most"}, std::pair{"inside", "expected inside:N"},
+                      std::pair{"inside:0", "at least 1"}, std::pair{"spheres", "expected spheres:N"},
+                      std::pair{"spheres:0", "at least 1"}, std::pair{"spheres:10,10", "given twice"},
+                      std::pair{"spheres:pair=d1", "at least one sphere count"},
+                      std::pair{"spheres:10,pair=d3", "unknown spheres parameter"},
+                      std::pair{"spheres:10,merge=fit", "unknown spheres parameter"},
+                      std::pair{"spheres:10,samples=2", "at least 4"},
+                      std::pair{"spheres:10,pair=d1,pair=d2", "given twice"}));
 
 TEST(ProxySpec, SameProxyTwiceIsRejected) {
   EXPECT_THROW(parse_proxy_specs({"hull:32", "aabb", "hull:32"}), Error);

@@ -1,0 +1,44 @@
+#pragma once
+// Simplifying a sphere set by merging pairs while keeping how often lines hit it
+// (occluding-spheres paper, section 3.2-3.4).
+
+#include <cstddef>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "mesh/sphere_set.h"
+#include "proxy/two_sphere_gssa.h"
+
+namespace visproxy {
+
+/// How close two spheres (radii R >= r, centres d apart) are for merging (paper, 3.2).
+enum class PairDistance {
+  d1,  ///< D1 = d: promotes merging small spheres
+  d2,  ///< D2 = d + r - R: how far the larger must grow to hold the smaller (negative when it does)
+};
+std::string_view pair_distance_name(PairDistance distance);
+
+struct MergeSpheresOptions {
+  PairDistance pair_distance = PairDistance::d2;
+  MergeRadius radius = MergeRadius::exact;  ///< which GSSA each merge preserves (two_sphere_gssa.h)
+};
+
+/// Merges the closest pair of `spheres` (by options.pair_distance) into one
+/// (merge_two_spheres) until `targets[k]` spheres remain, for every k, in one pass: the
+/// result's entry k is the set at targets[k] spheres, in a fixed order. Exactly targets[k]
+/// spheres each.
+///
+/// Every sphere remembers its best partner, found with a k-d tree over the centres that
+/// also bounds the radii below each node (so D2's lower bounds prune too); candidate pairs
+/// wait in a priority queue and are re-examined only when one of the two has changed, and
+/// only the merged sphere and the spheres whose partner was merged search again. About
+/// O(n log n) for n spheres when radii vary moderately. Deterministic: ties go to the lower
+/// index, nothing depends on addresses or thread scheduling.
+///
+/// Preconditions (InvalidInputError, empty file name): every target is at least 1 and at
+/// most spheres.size(); radii are finite and non-negative, centres finite.
+std::vector<std::vector<Sphere>> merge_spheres(std::span<const Sphere> spheres, std::span<const std::size_t> targets,
+                                               const MergeSpheresOptions& options = {});
+
+}  // namespace visproxy

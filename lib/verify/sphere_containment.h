@@ -1,0 +1,41 @@
+#pragma once
+// Exact check that balls lie inside a closed mesh: the guarantee of inside sphere proxies.
+
+#include <cstddef>
+#include <optional>
+#include <span>
+
+#include "mesh/sphere_set.h"
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+struct SphereContainment {
+  std::size_t spheres_checked = 0;
+  std::size_t spheres_outside = 0;            ///< spheres that fail (centre not inside, or radius too large)
+  std::optional<std::size_t> first_outside;   ///< index of the first sphere that fails
+  /// Min over the spheres of (signed distance from the centre to the surface - radius),
+  /// in mesh units, computed in doubles (rounded; informative only, the verdict is exact).
+  /// The distance is negative when the centre is not strictly inside. 0 for no spheres.
+  double min_margin_world = 0;
+  bool contained() const { return spheres_outside == 0; }
+};
+
+/// Whether every sphere (closed ball) lies inside the solid bounded by `watertight_mesh`.
+/// A sphere passes when its centre is strictly inside (locate_points: exact winding
+/// number) and radius^2 <= the squared distance from the centre to every triangle, both
+/// sides exact (the radius as the double it is; no tolerance). The ball can then touch the
+/// surface but not cross it. A negative or non-finite radius, or a non-finite centre, fails.
+///
+/// Triangles near each ball are found with CGAL's AABB tree and an exact ball-triangle
+/// test on a slightly enlarged ball; only those are compared exactly (CGAL's lazy exact
+/// kernel), so the cost is O(#F log #F) to build plus O(log #F) per sphere that does not
+/// touch the surface.
+///
+/// Precondition checked: the mesh has triangles and is closed and consistently oriented
+/// (every edge used once each way), otherwise InvalidInputError (empty file name).
+/// Overlapping parts are fine (the solid is where the winding number is not zero; a ball
+/// crossing an inner surface then fails, which is conservative).
+SphereContainment check_spheres_inside(const TriangleMesh& watertight_mesh, std::span<const Sphere> spheres);
+
+}  // namespace visproxy
