@@ -8,6 +8,7 @@
 #include "mesh/mesh_topology.h"
 #include "proxy/surface_distance.h"
 #include "verify/containment.h"
+#include "verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {
@@ -60,9 +61,20 @@ json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& c
 }
 
 json check_sphere_containment(const TriangleMesh& mesh, const std::vector<Sphere>& spheres) {
-  (void)mesh;
-  (void)spheres;
-  throw Error("verify: sphere inside proxies are not wired yet");
+  const SphereContainment containment = check_spheres_inside(mesh, spheres);
+  json result = {{"checked", {{"spheres", containment.spheres_checked}}},
+                 {"holds", containment.contained()},
+                 {"margin", containment.min_margin_world}};
+  if (containment.first_outside) {
+    const Sphere& sphere = spheres[*containment.first_outside];
+    char radius[32];
+    std::snprintf(radius, sizeof radius, "%.9g", sphere.radius);
+    result["counterexample"] = "sphere " + std::to_string(*containment.first_outside) + " (centre " +
+                               point_text(sphere.center) + ", radius " + radius + ") is not inside the mesh";
+  } else {
+    result["counterexample"] = nullptr;
+  }
+  return result;
 }
 
 std::string closed_mesh_problem(const TriangleMesh& mesh) {
