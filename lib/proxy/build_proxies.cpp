@@ -162,8 +162,7 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
 }
 
 std::size_t circumsphere_samples(const ProxySpec& spec) {
-  if (spec.samples > 0) return spec.samples;
-  return std::clamp<std::size_t>(4 * spec.levels.front(), 4000, 2'000'000);
+  return spec.samples > 0 ? spec.samples : default_circumsphere_samples(spec.levels.front());
 }
 
 // {value, lower, upper}; an unbounded upper end is null (schema: $defs/interval).
