@@ -7,6 +7,7 @@
 
 #include "core/errors.h"
 #include "inspect/mesh_report.h"
+#include "measure/proportion.h"
 #include "measure/proxy_measurement.h"
 #include "measure/random_lines.h"
 #include "mesh/mesh_topology.h"
@@ -162,8 +163,7 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
 }
 
 std::size_t circumsphere_samples(const ProxySpec& spec) {
-  if (spec.samples > 0) return spec.samples;
-  return std::clamp<std::size_t>(4 * spec.levels.front(), 4000, 2'000'000);
+  return spec.samples > 0 ? spec.samples : default_circumsphere_samples(spec.levels.front());
 }
 
 // {value, lower, upper}; an unbounded upper end is null (schema: $defs/interval).
@@ -296,6 +296,11 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
     for (std::size_t i = 0; i < blocked.size(); ++i) counts.add(reference->mesh_blocked[i] != 0, blocked[i] != 0);
     const ProxyMeasurement measured = measure_from_counts(counts, proxy.spec.kind());
     proxy.result["gssa_ratio"] = interval_json(measured.gssa_ratio, measured.gssa_ratio_lower, measured.gssa_ratio_upper);
+    const Proportion spheres_hit{counts.counts[0] + counts.counts[2], counts.total()};
+    const Proportion mesh_hit{counts.counts[0] + counts.counts[1], counts.total()};
+    proxy.result["spheres_hit_fraction"] =
+        interval_json(spheres_hit.fraction(), spheres_hit.lower(), spheres_hit.upper());
+    proxy.result["mesh_hit_fraction"] = interval_json(mesh_hit.fraction(), mesh_hit.lower(), mesh_hit.upper());
     proxy.result["gssa_lines"] = options.gssa_lines;
     proxy.result["gssa_seed"] = options.seed;
     if (proxy.spec.kind() == ProxyKind::inside) proxy.result["lines_hitting_spheres_not_mesh"] = counts.counts[2];

@@ -183,6 +183,10 @@ CircumsphereSet by_tetgen(const TriangleMesh& mesh) {
 
 }  // namespace
 
+std::size_t default_circumsphere_samples(std::size_t largest_level) {
+  return std::clamp<std::size_t>(4 * largest_level, 4000, 2'000'000);
+}
+
 std::string_view inner_tetrahedra_name(InnerTetrahedra method) {
   return method == InnerTetrahedra::tetgen ? "tetgen" : "normals";
 }

@@ -31,9 +31,14 @@ enum class InnerTetrahedra {
 };
 std::string_view inner_tetrahedra_name(InnerTetrahedra method);
 
+/// Surface samples for a set merged down to at most `largest_level` spheres:
+/// max(4000, 4 x largest_level), at most 2 000 000 (bunny00: 4000 samples, 13.5 K
+/// circumspheres, 0.35 s for spheres:1000,250,100,25,10).
+std::size_t default_circumsphere_samples(std::size_t largest_level);
+
 struct CircumsphereOptions {
   InnerTetrahedra tetrahedra = InnerTetrahedra::normals;
-  std::size_t samples = 20000;  ///< surface samples triangulated (normals)
+  std::size_t samples = 4000;  ///< surface samples triangulated (normals)
   std::uint64_t seed = 1;       ///< of the samples
 };
 

@@ -204,5 +204,23 @@ TEST_F(CliBuild, DefaultSetOnAMeshWithHolesLeavesOutInsideWithOneNote) {
   EXPECT_FALSE(std::filesystem::exists(folder_ / "inside-40.json"));
 }
 
+TEST_F(CliBuild, InsideSpheresPassVisproxyVerifyUntilOneGrows) {
+  const std::string mesh = testing::cgal_mesh("knot1.off").string();
+  ASSERT_EQ(testing::run_visproxy("build '" + mesh + "' -o '" + folder_.string() + "' --proxy inside:12").exit_code, 0);
+  const auto good = testing::run_visproxy("verify '" + mesh + "' '" + folder_.string() + "'");
+  EXPECT_EQ(good.exit_code, 0) << good.out << good.err;
+  EXPECT_EQ(json::parse(read_file(folder_ / "manifest.json")).at("proxies").at(0).at("verify").at("holds"), true);
+  // Sphere 7 grows by 1 % of the diagonal: it now crosses the surface.
+  std::vector<Sphere> spheres = read_sphere_set(folder_ / "inside-12.json");
+  spheres[7].radius += 0.01 * json::parse(read_file(folder_ / "manifest.json")).at("mesh").at("bbox").at("diagonal").get<double>();
+  write_sphere_set(folder_ / "inside-12.json", spheres);
+  const auto bad = testing::run_visproxy("verify '" + mesh + "' '" + folder_.string() + "'");
+  EXPECT_EQ(bad.exit_code, 1) << bad.out << bad.err;
+  const json entry = json::parse(read_file(folder_ / "manifest.json")).at("proxies").at(0);
+  EXPECT_EQ(entry.at("verify").at("holds"), false);
+  EXPECT_NE(entry.at("verify").at("counterexample").get<std::string>().find("sphere 7 "), std::string::npos);
+  EXPECT_LT(entry.at("verify").at("margin").get<double>(), 0.0);
+}
+
 }  // namespace
 }  // namespace visproxy

@@ -91,10 +91,13 @@ TEST(InscribedSpheres, ThinSlabAndTwoFarCubes) {
   EXPECT_NEAR(std::abs(both.spheres[0].center.x() - both.spheres[1].center.x()), 50, 0.1);  // one per cube
 }
 
+// Radii equal to the rounded distance to the surface are sometimes a hair too large: those
+// spheres are shrunk by ulps until the exact check passes (on knot1, 5 of 10).
 TEST(InscribedSpheres, ZeroMarginStillPassesTheExactCheck) {
   const TriangleMesh knot = read_mesh(testing::cgal_mesh("knot1.off"));
   const InscribedSpheres touching = build_inscribed_spheres(knot, {.count = 10, .margin_relative = 0});
   EXPECT_TRUE(check_spheres_inside(knot, touching.spheres).contained());
+  EXPECT_GT(touching.spheres_shrunk, 0u);
   EXPECT_LT(touching.min_margin_world, 1e-12 * bounding_box(knot).diagonal());
   EXPECT_EQ(build_inscribed_spheres(knot, {.count = 10, .margin_relative = 0}).spheres, touching.spheres);
 }
