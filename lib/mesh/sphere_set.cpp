@@ -1,6 +1,7 @@
 #include "mesh/sphere_set.h"
 
 #include <charconv>
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -95,6 +96,56 @@ TriangleMesh sphere_set_mesh(const std::vector<Sphere>& spheres, int levels) {
     append_mesh(mesh, part);
   }
   return mesh;
+}
+
+}  // namespace visproxy
+
+namespace visproxy {
+
+TriangleMesh sphere_union_boundary_mesh(const std::vector<Sphere>& spheres, int levels) {
+  const TriangleMesh all = sphere_set_mesh(spheres, levels);
+  if (spheres.size() < 2) return all;
+  // A uniform grid over the balls' boxes: each cell lists the balls overlapping it.
+  BoundingBox box;
+  std::vector<double> radii;
+  for (const Sphere& s : spheres) {
+    box.extend(s.center - Vertex::Constant(s.radius));
+    box.extend(s.center + Vertex::Constant(s.radius));
+    radii.push_back(s.radius);
+  }
+  std::nth_element(radii.begin(), radii.begin() + static_cast<std::ptrdiff_t>(radii.size() / 2), radii.end());
+  const double cell = std::max(2 * radii[radii.size() / 2], 1e-12 * box.diagonal());
+  const Eigen::Vector3i cells = ((box.max - box.min) / cell).array().ceil().cast<int>().cwiseMax(1).cwiseMin(64);
+  const Vertex size = (box.max - box.min).cwiseQuotient(cells.cast<double>());
+  auto cell_of = [&](const Vertex& p) {
+    Eigen::Vector3i c = ((p - box.min).cwiseQuotient(size)).array().floor().cast<int>();
+    return c.cwiseMax(0).cwiseMin(cells - Eigen::Vector3i::Ones());
+  };
+  auto index = [&](const Eigen::Vector3i& c) { return static_cast<std::size_t>((c.z() * cells.y() + c.y()) * cells.x() + c.x()); };
+  std::vector<std::vector<std::uint32_t>> grid(static_cast<std::size_t>(cells.prod()));
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    const Eigen::Vector3i lo = cell_of(spheres[i].center - Vertex::Constant(spheres[i].radius));
+    const Eigen::Vector3i hi = cell_of(spheres[i].center + Vertex::Constant(spheres[i].radius));
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) grid[index({x, y, z})].push_back(static_cast<std::uint32_t>(i));
+  }
+  // Vertex v of the joined mesh belongs to ball v / per_ball.
+  const std::size_t per_ball = all.positions.size() / spheres.size();
+  std::vector<std::uint8_t> buried(all.positions.size(), 0);
+  for (std::size_t v = 0; v < all.positions.size(); ++v) {
+    const Vertex& p = all.positions[v];
+    for (std::uint32_t other : grid[index(cell_of(p))])
+      if (other != v / per_ball && (p - spheres[other].center).norm() < spheres[other].radius * (1 - 1e-9)) {
+        buried[v] = 1;
+        break;
+      }
+  }
+  TriangleMesh boundary;
+  boundary.positions = all.positions;
+  for (const Triangle& t : all.triangles)
+    if (!(buried[t[0]] && buried[t[1]] && buried[t[2]])) boundary.triangles.push_back(t);
+  return boundary;
 }
 
 }  // namespace visproxy

@@ -34,4 +34,10 @@ std::vector<Sphere> read_sphere_set(const std::filesystem::path& path);
 /// viewer. Its vertices lie on the spheres, so it is slightly smaller than they are.
 TriangleMesh sphere_set_mesh(const std::vector<Sphere>& spheres, int levels = 2);
 
+/// sphere_set_mesh without the triangles that lie inside the union: those whose three
+/// corners are all strictly inside another ball. What remains approximates the boundary of
+/// the union of the balls, the surface a sphere proxy shows to rays (for distances between
+/// a sphere set and a mesh). Level 2 keeps within 1.3 % of each radius, level 3 within 0.3 %.
+TriangleMesh sphere_union_boundary_mesh(const std::vector<Sphere>& spheres, int levels = 2);
+
 }  // namespace visproxy

@@ -70,5 +70,31 @@ TEST(SphereSetMesh, IsClosedOutwardAndOnTheSpheres) {
   }
 }
 
+TEST(SphereUnionBoundaryMesh, DropsTrianglesBuriedInOtherBalls) {
+  const std::vector<Sphere> one = {{{0, 0, 0}, 1.0}};
+  EXPECT_EQ(sphere_union_boundary_mesh(one, 2), sphere_set_mesh(one, 2));
+  // Two overlapping balls and a small one wholly inside the first.
+  const std::vector<Sphere> spheres = {{{0, 0, 0}, 1.0}, {{1.2, 0, 0}, 1.0}, {{-0.2, 0.1, 0}, 0.3}};
+  const TriangleMesh all = sphere_set_mesh(spheres, 2), boundary = sphere_union_boundary_mesh(spheres, 2);
+  EXPECT_LT(boundary.triangles.size(), all.triangles.size());
+  std::size_t from_small = 0;
+  for (const Triangle& t : boundary.triangles) {
+    from_small += t[0] >= 2 * all.positions.size() / 3 ? 1 : 0;
+    // No kept triangle has all three corners strictly inside another ball.
+    bool all_buried = true;
+    for (VertexIndex v : t) {
+      const std::size_t own = v / (all.positions.size() / 3);
+      bool buried = false;
+      for (std::size_t other = 0; other < 3; ++other)
+        buried = buried || (other != own && (all.positions[v] - spheres[other].center).norm() < spheres[other].radius * (1 - 1e-9));
+      all_buried = all_buried && buried;
+    }
+    EXPECT_FALSE(all_buried);
+  }
+  EXPECT_EQ(from_small, 0u);  // the buried ball leaves nothing
+  // Each big ball keeps the part of its surface outside the other: most of it.
+  EXPECT_GT(boundary.triangles.size(), all.triangles.size() / 2);
+}
+
 }  // namespace
 }  // namespace visproxy
