@@ -99,15 +99,7 @@ struct CountingBvh::Impl {
   }
 
   bool primitive_blocks(std::uint32_t id, const Vertex& o, const Vertex& d) const {
-    if (!spheres.empty()) {
-      const Sphere& s = spheres[id];
-      const Vertex offset = o - s.center;
-      const double a = d.squaredNorm(), b = d.dot(offset), c = offset.squaredNorm() - s.radius * s.radius;
-      const double disc = b * b - a * c;
-      if (disc < 0 || a == 0) return a == 0 && c <= 0;
-      const double half_width = std::sqrt(disc);
-      return (-b + half_width) / a > 0 && (-b - half_width) / a < 1;
-    }
+    if (!spheres.empty()) return segment_meets_ball(spheres[id], o, d, 0.0, 1.0);
     const Triangle& t = mesh.triangles[id];
     const Vertex p0 = mesh.positions[t[0]], e1 = mesh.positions[t[1]] - p0, e2 = mesh.positions[t[2]] - p0;
     const Vertex h = d.cross(e2);
@@ -127,10 +119,8 @@ CountingBvh::CountingBvh(const TriangleMesh& mesh) : impl_(std::make_unique<Impl
     for (VertexIndex v : mesh.triangles[i]) box.extend(mesh.positions[v]);
     impl_->bounds.extend(box.min), impl_->bounds.extend(box.max);
     RTCBuildPrimitive p{};
-    p.lower_x = std::nextafter(static_cast<float>(box.min.x()), -1e30f), p.lower_y = std::nextafter(static_cast<float>(box.min.y()), -1e30f);
-    p.lower_z = std::nextafter(static_cast<float>(box.min.z()), -1e30f);
-    p.upper_x = std::nextafter(static_cast<float>(box.max.x()), 1e30f), p.upper_y = std::nextafter(static_cast<float>(box.max.y()), 1e30f);
-    p.upper_z = std::nextafter(static_cast<float>(box.max.z()), 1e30f);
+    p.lower_x = round_down(box.min.x()), p.lower_y = round_down(box.min.y()), p.lower_z = round_down(box.min.z());
+    p.upper_x = round_up(box.max.x()), p.upper_y = round_up(box.max.y()), p.upper_z = round_up(box.max.z());
     p.primID = static_cast<unsigned>(i);
     primitives.push_back(p);
   }
@@ -145,10 +135,8 @@ CountingBvh::CountingBvh(std::span<const Sphere> spheres) : impl_(std::make_uniq
     impl_->bounds.extend(spheres[i].center - r), impl_->bounds.extend(spheres[i].center + r);
     RTCBuildPrimitive p{};
     const Vertex lo = spheres[i].center - r, hi = spheres[i].center + r;
-    p.lower_x = std::nextafter(static_cast<float>(lo.x()), -1e30f), p.lower_y = std::nextafter(static_cast<float>(lo.y()), -1e30f);
-    p.lower_z = std::nextafter(static_cast<float>(lo.z()), -1e30f);
-    p.upper_x = std::nextafter(static_cast<float>(hi.x()), 1e30f), p.upper_y = std::nextafter(static_cast<float>(hi.y()), 1e30f);
-    p.upper_z = std::nextafter(static_cast<float>(hi.z()), 1e30f);
+    p.lower_x = round_down(lo.x()), p.lower_y = round_down(lo.y()), p.lower_z = round_down(lo.z());
+    p.upper_x = round_up(hi.x()), p.upper_y = round_up(hi.y()), p.upper_z = round_up(hi.z());
     p.primID = static_cast<unsigned>(i);
     primitives.push_back(p);
   }

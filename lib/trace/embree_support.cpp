@@ -9,16 +9,6 @@
 namespace visproxy {
 namespace {
 
-float round_down(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
-}
-
-float round_up(double value) {
-  const auto rounded = static_cast<float>(value);
-  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
-}
-
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   const Sphere& sphere = static_cast<const Sphere*>(args->geometryUserPtr)[args->primID];
   RTCBounds* bounds = args->bounds_o;
@@ -30,25 +20,6 @@ void sphere_bounds(const RTCBoundsFunctionArguments* args) {
   bounds->upper_z = round_up(sphere.center.z() + sphere.radius);
 }
 
-// Whether the ray's parameter interval (tnear, tfar) meets the closed ball: the roots of
-// |o + t d - c|^2 = r^2, in double precision from the ray's float values.
-bool ray_meets_ball(const Sphere& sphere, const Vertex& origin, const Vertex& direction, double tnear, double tfar) {
-  const Vertex offset = origin - sphere.center;
-  const double a = direction.squaredNorm();
-  const double b = direction.dot(offset);
-  const double c = offset.squaredNorm() - sphere.radius * sphere.radius;
-  if (a == 0) return c <= 0 && tnear < tfar;
-  const double discriminant = b * b - a * c;
-  if (discriminant < 0) return false;
-  // Stable roots: q = -(b + sign(b) sqrt(disc)), t = q / a and c / q.
-  const double root = std::sqrt(discriminant);
-  const double q = -(b + std::copysign(root, b));
-  double t0 = q / a;
-  double t1 = q != 0 ? c / q : t0;
-  if (t0 > t1) std::swap(t0, t1);
-  return t1 > tnear && t0 < tfar;
-}
-
 void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
   const Sphere& sphere = static_cast<const Sphere*>(args->geometryUserPtr)[args->primID];
   for (unsigned lane = 0; lane < args->N; ++lane) {
@@ -58,7 +29,7 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
     const Vertex origin(RTCRayN_org_x(ray, n, lane), RTCRayN_org_y(ray, n, lane), RTCRayN_org_z(ray, n, lane));
     const Vertex direction(RTCRayN_dir_x(ray, n, lane), RTCRayN_dir_y(ray, n, lane), RTCRayN_dir_z(ray, n, lane));
     float& tfar = RTCRayN_tfar(ray, n, lane);
-    if (!ray_meets_ball(sphere, origin, direction, RTCRayN_tnear(ray, n, lane), tfar)) continue;
+    if (!segment_meets_ball(sphere, origin, direction, RTCRayN_tnear(ray, n, lane), tfar)) continue;
     // Hand the hit to the filter functions (the renderer's own-instance test), as
     // Embree does for its own geometry. Single rays only (rtcOccluded1): N is 1.
     if (n == 1) {
@@ -85,6 +56,33 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
 void sphere_intersect(const RTCIntersectFunctionNArguments*) {}
 
 }  // namespace
+
+float round_down(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
+}
+
+float round_up(double value) {
+  const auto rounded = static_cast<float>(value);
+  return static_cast<double>(rounded) >= value ? rounded : std::nextafter(rounded, std::numeric_limits<float>::infinity());
+}
+
+bool segment_meets_ball(const Sphere& sphere, const Vertex& origin, const Vertex& direction, double tnear, double tfar) {
+  const Vertex offset = origin - sphere.center;
+  const double a = direction.squaredNorm();
+  const double b = direction.dot(offset);
+  const double c = offset.squaredNorm() - sphere.radius * sphere.radius;
+  if (a == 0) return c <= 0 && tnear < tfar;
+  const double discriminant = b * b - a * c;
+  if (discriminant < 0) return false;
+  // Stable roots: q = -(b + sign(b) sqrt(disc)), t = q / a and c / q.
+  const double root = std::sqrt(discriminant);
+  const double q = -(b + std::copysign(root, b));
+  double t0 = q / a;
+  double t1 = q != 0 ? c / q : t0;
+  if (t0 > t1) std::swap(t0, t1);
+  return t1 > tnear && t0 < tfar;
+}
 
 EmbreeDevice::EmbreeDevice() {
   device_ = rtcNewDevice(nullptr);

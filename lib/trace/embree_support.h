@@ -50,6 +50,14 @@ unsigned attach_triangles(EmbreeDevice& device, RTCScene scene, const TriangleMe
 /// scene. For occlusion queries only: rtcIntersect finds no sphere hit.
 unsigned attach_spheres(EmbreeDevice& device, RTCScene scene, std::span<const Sphere> spheres, unsigned mask = 0xFFFFFFFFu);
 
+/// The float at or below (above) a double: for boxes that must hold what they bound.
+float round_down(double value);
+float round_up(double value);
+
+/// Whether the segment origin + t direction, tnear < t < tfar, meets the closed ball
+/// (double precision, numerically stable roots).
+bool segment_meets_ball(const Sphere& sphere, const Vertex& origin, const Vertex& direction, double tnear, double tfar);
+
 /// Fills an RTCRay for the open segment from `from` to `to` (tnear 0, tfar 1, all mask bits).
 RTCRay segment_ray(const Vertex& from, const Vertex& to);
 
