@@ -1,5 +1,11 @@
 #include "render/image.h"
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStdIO.h>
 #include <png.h>
 
 #include <algorithm>
@@ -70,6 +76,85 @@ Image read_pfm(const std::filesystem::path& path) {
   return image;
 }
 
+void write_exr(const std::filesystem::path& path, const Image& image) {
+  // Planar float channels for OpenEXR's frame buffer; the file is built in memory and then
+  // written atomically like every other output.
+  const std::size_t count = image.pixels.size();
+  std::vector<float> planes(3 * count);
+  for (std::size_t i = 0; i < count; ++i)
+    for (std::size_t c = 0; c < 3; ++c) planes[c * count + i] = static_cast<float>(image.pixels[i][static_cast<int>(c)]);
+  std::string bytes;
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    Imf::FrameBuffer frame;
+    const char* names[3] = {"R", "G", "B"};
+    for (std::size_t c = 0; c < 3; ++c) {
+      header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+      frame.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes.data() + c * count), sizeof(float),
+                                        sizeof(float) * static_cast<std::size_t>(image.width)));
+    }
+    Imf::StdOSStream stream;
+    {
+      Imf::OutputFile file(stream, header, 1);
+      file.setFrameBuffer(frame);
+      file.writePixels(image.height);
+    }
+    bytes = stream.str();
+  } catch (const std::exception& e) {
+    throw IOError(path, std::string("OpenEXR could not encode the image: ") + e.what());
+  }
+  write_file_atomically(path, bytes);
+}
+
+Image read_exr(const std::filesystem::path& path) {
+  const std::string bytes = read_file(path);
+  try {
+    Imf::StdISStream stream;
+    stream.str(bytes);
+    Imf::InputFile file(stream, 1);
+    const Imath::Box2i window = file.header().dataWindow();
+    const long width = static_cast<long>(window.max.x) - window.min.x + 1, height = static_cast<long>(window.max.y) - window.min.y + 1;
+    if (width <= 0 || height <= 0 || width > 65536 || height > 65536) throw InvalidInputError(path, "bad image size");
+    const auto count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+    std::vector<float> planes(3 * count, 0.0f);
+    Imf::FrameBuffer frame;
+    const char* names[3] = {"R", "G", "B"};
+    // Slices are addressed from the data window's origin, which need not be (0, 0).
+    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(window.min.x) + static_cast<std::ptrdiff_t>(window.min.y) * width;
+    for (std::size_t c = 0; c < 3; ++c)
+      frame.insert(names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes.data() + c * count - origin), sizeof(float),
+                                        sizeof(float) * static_cast<std::size_t>(width), 1, 1, 0.0));
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    Image image(static_cast<int>(width), static_cast<int>(height));
+    for (std::size_t i = 0; i < count; ++i)
+      for (std::size_t c = 0; c < 3; ++c) image.pixels[i][static_cast<int>(c)] = planes[c * count + i];
+    return image;
+  } catch (const InvalidInputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InvalidInputError(path, std::string("not a readable OpenEXR image: ") + e.what());
+  }
+}
+
+bool is_linear_image_path(const std::filesystem::path& path) {
+  const std::string extension = path.extension().string();
+  return extension == ".pfm" || extension == ".exr";
+}
+
+void write_linear_image(const std::filesystem::path& path, const Image& image) {
+  if (path.extension() == ".pfm") return write_pfm(path, image);
+  if (path.extension() == ".exr") return write_exr(path, image);
+  throw InvalidInputError(path, "unsupported image format (use .pfm or .exr)");
+}
+
+Image read_linear_image(const std::filesystem::path& path) {
+  if (path.extension() == ".pfm") return read_pfm(path);
+  if (path.extension() == ".exr") return read_exr(path);
+  throw InvalidInputError(path, "unsupported image format (use .pfm or .exr)");
+}
+
 void write_png(const std::filesystem::path& path, const Image& image, double exposure) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
@@ -103,6 +188,13 @@ double mean_squared_error(const Image& a, const Image& b) {
   double sum = 0;
   for (std::size_t i = 0; i < a.pixels.size(); ++i) sum += (a.pixels[i] - b.pixels[i]).squaredNorm();
   return a.pixels.empty() ? 0.0 : sum / (3.0 * static_cast<double>(a.pixels.size()));
+}
+
+Image squared_error_map(const Image& a, const Image& b) {
+  if (a.width != b.width || a.height != b.height) throw Error("error map of images of different sizes");
+  Image map(a.width, a.height);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) map.pixels[i] = Color::Constant((a.pixels[i] - b.pixels[i]).squaredNorm() / 3.0);
+  return map;
 }
 
 bool all_finite(const Image& image) {

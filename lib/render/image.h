@@ -1,5 +1,6 @@
 #pragma once
-// Linear RGB images: PFM for metrics, tone-mapped PNG for people, and the error between two.
+// Linear RGB images: PFM or OpenEXR for metrics, tone-mapped PNG for people, and the error
+// between two.
 
 #include <filesystem>
 #include <vector>
@@ -27,11 +28,27 @@ void write_pfm(const std::filesystem::path& path, const Image& image);
 /// Reads a colour PFM of either byte order; throws InvalidInputError naming the file.
 Image read_pfm(const std::filesystem::path& path);
 
+/// OpenEXR, scanlines of 32-bit float R, G, B channels, ZIP-compressed (lossless).
+void write_exr(const std::filesystem::path& path, const Image& image);
+/// Reads the R, G and B channels of an OpenEXR image (any pixel type; missing channels
+/// read as 0); throws InvalidInputError naming the file.
+Image read_exr(const std::filesystem::path& path);
+
+/// Whether the linear formats know this extension (".pfm", ".exr").
+bool is_linear_image_path(const std::filesystem::path& path);
+/// write_pfm or write_exr by the extension; InvalidInputError for any other.
+void write_linear_image(const std::filesystem::path& path, const Image& image);
+/// read_pfm or read_exr by the extension; InvalidInputError for any other.
+Image read_linear_image(const std::filesystem::path& path);
+
 /// 8-bit sRGB PNG of exposure * value (values above 1 clip), through libpng.
 void write_png(const std::filesystem::path& path, const Image& image, double exposure = 1.0);
 
 /// Mean over pixels and channels of the squared difference; both images the same size.
 double mean_squared_error(const Image& a, const Image& b);
+
+/// Per pixel squared error |a - b|^2 / 3 (mean over the channels), as a grey image.
+Image squared_error_map(const Image& a, const Image& b);
 
 /// True when every channel of every pixel is finite.
 bool all_finite(const Image& image);
