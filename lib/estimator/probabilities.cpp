@@ -168,4 +168,38 @@ Probabilities apply_cost_heuristic(ProxyKind kind, const Probabilities& probabil
   return apply_floor(kind, p, floor);
 }
 
+double control_variate_variance(const RayTypeFractions& fractions, const CorrectionProbabilities& q) {
+  if (fractions.empty()) return 0;
+  const auto& f = fractions.f;
+  const double v = fractions.v_avg();
+  auto roulette = [](double weight, double probability) {  // weight (1/q - 1)
+    if (weight == 0) return 0.0;
+    return probability > 0 ? weight * (1 / probability - 1) : kInfinity;
+  };
+  const double extra = roulette(f[1], q.after_miss) + roulette(f[2], q.after_hit);
+  return std::isinf(extra) ? kInfinity : v * (1 - v) + extra;
+}
+
+CorrectionProbabilities equal_correction_probabilities(ProxyKind kind) {
+  return {kind == ProxyKind::outside ? 0.0 : 0.5, kind == ProxyKind::inside ? 0.0 : 0.5};
+}
+
+CorrectionEvidence CorrectionEvidence::from(const RayTypeCounts& counts) {
+  const auto& c = counts.counts;  // types 1..4: (V, V') = (0, 0), (0, 1), (1, 0), (1, 1)
+  CorrectionEvidence evidence;
+  evidence.seen = {c[1] + c[3], c[0] + c[2]};
+  evidence.disagreed = {c[1], c[2]};
+  return evidence;
+}
+
+CorrectionProbabilities correction_probabilities(ProxyKind kind, const CorrectionEvidence& evidence,
+                                                 const CorrectionOptions& options) {
+  auto side = [&](int i) {
+    const double p = (static_cast<double>(evidence.disagreed[static_cast<std::size_t>(i)]) + 0.5) /
+                     (static_cast<double>(evidence.seen[static_cast<std::size_t>(i)]) + 1.0);
+    return std::clamp(options.scale * std::sqrt(p), std::clamp(options.floor, 0.0, 1.0), 1.0);
+  };
+  return {kind == ProxyKind::outside ? 0.0 : side(0), kind == ProxyKind::inside ? 0.0 : side(1)};
+}
+
 }  // namespace visproxy

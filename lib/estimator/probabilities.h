@@ -93,4 +93,56 @@ Probabilities minimise_variance_numerically(ProxyKind kind, const RayTypeFractio
 Probabilities apply_cost_heuristic(ProxyKind kind, const Probabilities& probabilities,
                                    const RayTypeFractions& fractions, double floor = 0);
 
+/// The proxy as a control variate, an alternative to eq. 8 that always traces the proxy
+/// and corrects its answer V' with the exact geometry under Russian roulette:
+///   estimate = V' + (V - V') [u < q] / q,   q = after_miss when V' = 1, after_hit when V' = 0.
+/// Its mean is V for any q > 0, and for q = 0 on the side where V cannot differ from V'
+/// (an outside proxy's misses, an inside proxy's hits: the claims `visproxy verify` proves).
+/// Eq. 8 draws its term before the proxy answers; here the proxy's answer picks the
+/// probability, so a ray that misses an outside proxy is 1 at no cost and without the
+/// noise of eq. 8's (a) term (Rao-Blackwellisation over the terms whose cost is the same).
+struct CorrectionProbabilities {
+  double after_miss = 0.5;  ///< trace the mesh when the proxy lets the ray through (V' = 1)
+  double after_hit = 0.5;   ///< trace the mesh when the proxy blocks it (V' = 0)
+};
+
+/// Variance per ray of the control-variate estimator: Var(V) + f2 (1/after_miss - 1) +
+/// f3 (1/after_hit - 1), with Var(V) = V_avg (1 - V_avg). +infinity when a side with
+/// disagreeing rays is never traced; 0 for an empty population.
+double control_variate_variance(const RayTypeFractions& fractions, const CorrectionProbabilities& q);
+
+/// 1/2 on each side the kind needs: outside {0, 1/2}, inside {1/2, 0}, general {1/2, 1/2}.
+CorrectionProbabilities equal_correction_probabilities(ProxyKind kind);
+
+/// What is known of the rays on each side of the proxy's answer: how many were seen with
+/// the mesh traced, and on how many the mesh disagreed with the proxy. Index 0: the proxy
+/// let the ray through (V' = 1); 1: the proxy blocked it (V' = 0).
+struct CorrectionEvidence {
+  std::array<std::uint64_t, 2> seen{}, disagreed{};
+
+  /// From probe rays, each of which traced both.
+  static CorrectionEvidence from(const RayTypeCounts& counts);
+  void add(bool proxy_blocked, bool mesh_blocked) {
+    ++seen[proxy_blocked ? 1 : 0];
+    disagreed[proxy_blocked ? 1 : 0] += proxy_blocked != mesh_blocked ? 1 : 0;
+  }
+};
+
+struct CorrectionOptions {
+  /// kappa: q = kappa sqrt(p) on a side whose rays disagree with probability p.
+  double scale = 2;
+  double floor = 0.05;  ///< least q on each side the kind needs
+};
+
+/// The probability of tracing the mesh on each side the kind needs:
+///   q = clamp(scale * sqrt(p), floor, 1),  p = (disagreed + 1/2) / (seen + 1)
+/// (the Krichevsky-Trofimov estimate of the disagreeing fraction: a side with no evidence
+/// gets p = 1/2, one whose rays all agreed so far a small but positive p). The root is the
+/// minimiser of one side's added variance p (1/q - 1) plus lambda q, its cost in exact
+/// queries, with scale = 1 / sqrt(lambda): rays where proxy and mesh always agree (umbrae,
+/// open space) are rarely traced, those where they often disagree (penumbrae) always.
+/// Sides the kind does not need (an outside proxy's misses, an inside proxy's hits) get 0.
+CorrectionProbabilities correction_probabilities(ProxyKind kind, const CorrectionEvidence& evidence,
+                                                 const CorrectionOptions& options = {});
+
 }  // namespace visproxy

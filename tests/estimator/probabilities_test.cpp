@@ -180,5 +180,80 @@ TEST(CostHeuristic, ShiftsProbabilityToTheProxyWhereProxyAndMeshAgree) {
   EXPECT_GE(apply_cost_heuristic(ProxyKind::outside, p, all_agree, 0.05).p2, 0.05);
 }
 
+// The control variate's variance formula against a simulation of the estimator itself, and
+// its mean against V_avg (unbiased), for probabilities below 1 on both sides.
+TEST(ControlVariate, VarianceFormulaAgreesWithSimulatedEstimator) {
+  RayTypeFractions fractions;
+  fractions.f = {0.3, 0.1, 0.2, 0.4};
+  const CorrectionProbabilities q{0.3, 0.6};
+  Random random(12);
+  const int n = 2'000'000;
+  double sum = 0, sum_squares = 0;
+  for (int i = 0; i < n; ++i) {
+    const double u = random.uniform();
+    const int type = u < 0.3 ? 1 : u < 0.4 ? 2 : u < 0.6 ? 3 : 4;
+    const double v = type >= 3 ? 1 : 0, v_proxy = (type == 2 || type == 4) ? 1 : 0;
+    const double trace = v_proxy == 1 ? q.after_miss : q.after_hit;
+    const double estimate = random.uniform() < trace ? v_proxy + (v - v_proxy) / trace : v_proxy;
+    sum += estimate;
+    sum_squares += estimate * estimate;
+  }
+  const double mean = sum / n, variance = sum_squares / n - mean * mean;
+  const double expected = control_variate_variance(fractions, q);
+  EXPECT_NEAR(expected, 0.6 * 0.4 + 0.1 * (1 / 0.3 - 1) + 0.2 * (1 / 0.6 - 1), 1e-12);
+  EXPECT_NEAR(mean, 0.6, 5 * std::sqrt(expected / n));  // 5 sigma
+  EXPECT_NEAR(variance, expected, 0.01 * expected);
+}
+
+// Eq. 8 draws (a) or (b) before the proxy answers; after a miss both cost the same and (b)
+// returns 0, so the control variate (which returns the proxy's answer there) never does
+// worse at the same probability of tracing the mesh after a hit.
+TEST(ControlVariate, NeverNoisierThanEquation8AtTheSameExactWork) {
+  for (ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general})
+    for (const RayTypeFractions& fractions : grid(kind)) {
+      const Probabilities p = optimal_probabilities(kind, fractions, {.floor = 0.05});
+      // Eq. 8 traces the mesh after a hit with p2 and after a miss with p3.
+      const CorrectionProbabilities q{p.p3, p.p2};
+      EXPECT_LE(control_variate_variance(fractions, q), estimator_variance(fractions, p) + 1e-12)
+          << kind_name(kind) << " " << fractions.f[0] << " " << fractions.f[1] << " " << fractions.f[2] << " " << fractions.f[3];
+    }
+}
+
+TEST(ControlVariate, SidesTheKindRulesOutAreNeverTracedAndCostNothing) {
+  EXPECT_EQ(equal_correction_probabilities(ProxyKind::outside).after_miss, 0.0);
+  EXPECT_EQ(equal_correction_probabilities(ProxyKind::outside).after_hit, 0.5);
+  EXPECT_EQ(equal_correction_probabilities(ProxyKind::inside).after_hit, 0.0);
+  EXPECT_EQ(equal_correction_probabilities(ProxyKind::general).after_miss, 0.5);
+  RayTypeFractions outside;  // no type 2: an outside proxy's misses are free
+  outside.f = {0.5, 0, 0.2, 0.3};
+  EXPECT_TRUE(std::isfinite(control_variate_variance(outside, {0.0, 0.5})));
+  EXPECT_TRUE(std::isinf(control_variate_variance(outside, {0.5, 0.0})));
+  EXPECT_EQ(control_variate_variance(RayTypeFractions{}, {0, 0}), 0.0);
+}
+
+TEST(ControlVariate, ProbabilitiesFollowTheRootOfTheDisagreement) {
+  CorrectionEvidence evidence;
+  // No evidence: p = 1/2, q = min(1, 2 sqrt(1/2)) = 1 on every needed side.
+  EXPECT_EQ(correction_probabilities(ProxyKind::general, evidence).after_miss, 1.0);
+  EXPECT_EQ(correction_probabilities(ProxyKind::general, evidence).after_hit, 1.0);
+  EXPECT_EQ(correction_probabilities(ProxyKind::outside, evidence).after_miss, 0.0);
+  EXPECT_EQ(correction_probabilities(ProxyKind::inside, evidence).after_hit, 0.0);
+  // 99 hits that all agreed (umbra): p = 0.5 / 100, q = 2 sqrt(0.005) = 0.141.
+  for (int i = 0; i < 99; ++i) evidence.add(/*proxy_blocked=*/true, /*mesh_blocked=*/true);
+  EXPECT_NEAR(correction_probabilities(ProxyKind::outside, evidence).after_hit, 2 * std::sqrt(0.005), 1e-12);
+  EXPECT_NEAR(correction_probabilities(ProxyKind::outside, evidence, {.scale = 1, .floor = 0.2}).after_hit, 0.2, 1e-12);
+  // Many disagreements (penumbra): always traced.
+  for (int i = 0; i < 60; ++i) evidence.add(true, false);
+  EXPECT_EQ(correction_probabilities(ProxyKind::outside, evidence).after_hit, 1.0);
+  // From probe counts: types 1..4 = (mesh, proxy) blocked, (mesh), (proxy), neither.
+  RayTypeCounts counts;
+  counts.counts = {40, 3, 7, 50};
+  const CorrectionEvidence from = CorrectionEvidence::from(counts);
+  EXPECT_EQ(from.seen[0], 53u);  // the proxy let through types 2 and 4
+  EXPECT_EQ(from.disagreed[0], 3u);
+  EXPECT_EQ(from.seen[1], 47u);  // the proxy blocked types 1 and 3
+  EXPECT_EQ(from.disagreed[1], 7u);
+}
+
 }  // namespace
 }  // namespace visproxy
