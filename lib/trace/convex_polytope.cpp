@@ -1,0 +1,106 @@
+#include "trace/convex_polytope.h"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mesh/mesh_topology.h"
+
+namespace visproxy {
+
+std::optional<ConvexPolytope> ConvexPolytope::from_mesh(const TriangleMesh& mesh, std::size_t max_planes) {
+  // A closed convex mesh of at most max_planes planes that is finely tessellated is rare;
+  // the limit keeps big meshes from paying for the topology check.
+  if (mesh.triangles.size() < 4 || mesh.triangles.size() > 64 * max_planes) return std::nullopt;
+  const MeshTopology topology = analyze_topology(mesh);
+  if (!topology.closed() || !topology.manifold() || !topology.consistently_oriented() || topology.components != 1)
+    return std::nullopt;
+  const double diagonal = bounding_box(mesh).diagonal();
+  if (!(diagonal > 0)) return std::nullopt;
+  const double tolerance = 1e-9 * diagonal;
+  const std::vector<Vertex> points = used_positions(mesh);
+
+  ConvexPolytope polytope;
+  double signed_volume = 0;
+  for (const Triangle& t : mesh.triangles) {
+    const Vertex& a = mesh.positions[t[0]];
+    const Vertex& b = mesh.positions[t[1]];
+    const Vertex& c = mesh.positions[t[2]];
+    signed_volume += a.dot(b.cross(c)) / 6;
+    const Vertex n = (b - a).cross(c - a);
+    if (n.norm() <= 1e-12 * diagonal * diagonal) continue;  // a sliver gives no reliable plane
+    Plane plane{n.normalized(), 0};
+    plane.offset = plane.normal.dot(a);
+    // Coplanar faces share one plane.
+    const bool known = std::any_of(polytope.planes_.begin(), polytope.planes_.end(), [&](const Plane& p) {
+      return p.normal.dot(plane.normal) > 1 - 1e-12 && std::abs(p.offset - plane.offset) <= tolerance;
+    });
+    if (known) continue;
+    if (polytope.planes_.size() == max_planes) return std::nullopt;
+    polytope.planes_.push_back(plane);
+  }
+  if (!(signed_volume > 0) || polytope.planes_.size() < 4) return std::nullopt;
+  // Convex: every vertex behind every face plane.
+  for (Plane& plane : polytope.planes_) {
+    double height = -std::numeric_limits<double>::infinity();
+    for (const Vertex& v : points) height = std::max(height, plane.normal.dot(v) - plane.offset);
+    if (height > tolerance) return std::nullopt;
+    plane.offset += std::max(height, 0.0) + tolerance;
+  }
+  // The ball: around the box's centre, through the farthest vertex, grown by more than
+  // the planes moved out (a vertex of the pushed-out solid moves by about tolerance over
+  // the sine of the angle between its planes, which the factor covers for any sane mesh).
+  const BoundingBox box = bounding_box(mesh);
+  polytope.center_ = 0.5 * (box.min + box.max);
+  for (const Vertex& v : points) polytope.radius_ = std::max(polytope.radius_, (v - polytope.center_).norm());
+  polytope.radius_ += 1e3 * tolerance;
+  return polytope;
+}
+
+ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) const {
+  // x = A y + t; n . y <= d  <=>  (A^-T n) . x <= d + (A^-T n) . t.
+  const Eigen::Matrix3d normal_matrix = transform.linear().inverse().transpose();
+  ConvexPolytope result;
+  result.center_ = transform * center_;
+  result.radius_ = radius_ * Eigen::JacobiSVD<Eigen::Matrix3d>(transform.linear()).singularValues()(0) * (1 + 1e-12);
+  for (const Plane& plane : planes_) {
+    const Vertex n = normal_matrix * plane.normal;
+    const double length = n.norm();
+    result.planes_.push_back({n / length, (plane.offset + n.dot(transform.translation())) / length});
+  }
+  return result;
+}
+
+bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
+  const Vertex d = to - from;
+  const double length2 = d.squaredNorm();
+  const double closest = length2 > 0 ? std::clamp((center_ - from).dot(d) / length2, 0.0, 1.0) : 0.0;
+  if ((from + closest * d - center_).squaredNorm() > radius_ * radius_) return false;
+  double enter = 0, leave = 1;
+  for (const Plane& plane : planes_) {
+    const double along = plane.normal.dot(d);
+    const double inside = plane.offset - plane.normal.dot(from);  // >= 0: `from` behind the plane
+    if (along == 0) {
+      if (inside < 0) return false;
+      continue;
+    }
+    const double t = inside / along;
+    if (along > 0)
+      leave = std::min(leave, t);
+    else
+      enter = std::max(enter, t);
+    if (enter > leave) return false;
+  }
+  return true;
+}
+
+bool ConvexPolytope::separated_from(std::span<const Vertex> points) const {
+  if (points.empty()) return true;
+  return std::any_of(planes_.begin(), planes_.end(), [&](const Plane& plane) {
+    return std::all_of(points.begin(), points.end(),
+                       [&](const Vertex& p) { return plane.normal.dot(p) > plane.offset; });
+  });
+}
+
+}  // namespace visproxy

@@ -1,0 +1,50 @@
+#pragma once
+// Closed convex meshes as intersections of half-spaces, tested against segments by
+// clipping (Cyrus-Beck): a few dot products per face and no acceleration structure, far
+// cheaper than a BVH query for boxes and bounded hulls of a few dozen faces.
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+/// The solid bounded by a closed convex mesh: points x with normal . x <= offset for every
+/// face plane. Solid, not surface: a segment inside it meets it.
+class ConvexPolytope {
+ public:
+  struct Plane {
+    Vertex normal;  ///< unit, pointing out of the solid
+    double offset = 0;
+  };
+
+  /// The polytope of `mesh` when the mesh is a closed convex solid with outward faces and
+  /// at most `max_planes` distinct face planes: every vertex lies behind (or within
+  /// `tolerance` of) every face's plane, the winding's normals enclose a positive volume.
+  /// Each plane is pushed out by `tolerance` (default: 1e-9 of the bounding-box diagonal),
+  /// so the solid holds the mesh's own solid despite rounding. nullopt otherwise (not
+  /// closed convex, degenerate, too many planes).
+  static std::optional<ConvexPolytope> from_mesh(const TriangleMesh& mesh, std::size_t max_planes = 64);
+
+  /// The image of the polytope under an affine map (planes mapped exactly, renormalised).
+  ConvexPolytope transformed(const Eigen::Affine3d& transform) const;
+
+  /// Whether the closed segment from `from` to `to` meets the solid.
+  bool meets_segment(const Vertex& from, const Vertex& to) const;
+
+  /// True when one face plane has every point strictly in front of it: the convex hull of
+  /// the points (a light shaft, say) then misses the solid. False proves nothing.
+  bool separated_from(std::span<const Vertex> points) const;
+
+  const std::vector<Plane>& planes() const { return planes_; }
+
+ private:
+  std::vector<Plane> planes_;
+  Vertex center_ = Vertex::Zero();  ///< a ball holding the solid: segments that miss it are rejected first
+  double radius_ = 0;
+};
+
+}  // namespace visproxy

@@ -1,0 +1,84 @@
+#include "trace/convex_polytope.h"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+#include "core/random.h"
+#include "mesh/sphere_set.h"
+
+namespace visproxy {
+namespace {
+
+TriangleMesh unit_cube() {
+  TriangleMesh mesh;
+  for (int c = 0; c < 8; ++c) mesh.positions.emplace_back(c & 1 ? 1.0 : 0.0, c & 2 ? 1.0 : 0.0, c & 4 ? 1.0 : 0.0);
+  mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return mesh;
+}
+
+TEST(ConvexPolytope, CubeHasSixPlanesAndAcceptsOnlyClosedConvexOutwardMeshes) {
+  const auto cube = ConvexPolytope::from_mesh(unit_cube());
+  ASSERT_TRUE(cube.has_value());
+  EXPECT_EQ(cube->planes().size(), 6u);  // coplanar triangle pairs share a plane
+  TriangleMesh inverted = unit_cube();
+  for (Triangle& t : inverted.triangles) std::swap(t[1], t[2]);
+  EXPECT_FALSE(ConvexPolytope::from_mesh(inverted).has_value());
+  TriangleMesh open = unit_cube();
+  open.triangles.pop_back();
+  EXPECT_FALSE(ConvexPolytope::from_mesh(open).has_value());
+  TriangleMesh dented = unit_cube();
+  dented.positions[7] = {0.6, 0.6, 0.6};  // a corner pushed in: not convex
+  EXPECT_FALSE(ConvexPolytope::from_mesh(dented).has_value());
+  // A finely tessellated ball has more planes than allowed.
+  EXPECT_FALSE(ConvexPolytope::from_mesh(sphere_set_mesh({{{0, 0, 0}, 1.0}}, 3)).has_value());
+  EXPECT_TRUE(ConvexPolytope::from_mesh(sphere_set_mesh({{{0, 0, 0}, 1.0}}, 3), 4096).has_value());
+}
+
+// Random segments against a rotated, scaled, moved cube: the same answers as a slab test
+// in the cube's own frame.
+TEST(ConvexPolytope, TransformedSolidMatchesTheSlabTestInItsOwnFrame) {
+  Eigen::Affine3d transform = Eigen::Affine3d::Identity();
+  transform.translate(Vertex(0.3, -2, 1))
+      .rotate(Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized()))
+      .scale(Vertex(2, 0.5, 1.5));
+  const ConvexPolytope solid = ConvexPolytope::from_mesh(unit_cube())->transformed(transform);
+  const Eigen::Affine3d inverse = transform.inverse();
+  auto in_unit_cube = [&](const Vertex& a, const Vertex& b) {
+    const Vertex from = inverse * a, d = inverse * b - from;
+    double enter = 0, leave = 1;
+    for (int k = 0; k < 3; ++k) {
+      if (d[k] == 0) {
+        if (from[k] < 0 || from[k] > 1) return false;
+        continue;
+      }
+      double t0 = -from[k] / d[k], t1 = (1 - from[k]) / d[k];
+      if (t0 > t1) std::swap(t0, t1);
+      enter = std::max(enter, t0), leave = std::min(leave, t1);
+    }
+    return enter <= leave;
+  };
+  Random random(5);
+  int met = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vertex a = transform * Vertex(3 * random.uniform() - 1, 3 * random.uniform() - 1, 3 * random.uniform() - 1);
+    const Vertex b = transform * Vertex(3 * random.uniform() - 1, 3 * random.uniform() - 1, 3 * random.uniform() - 1);
+    const bool expected = in_unit_cube(a, b);
+    EXPECT_EQ(solid.meets_segment(a, b), expected) << a.transpose() << " -> " << b.transpose();
+    met += expected ? 1 : 0;
+  }
+  EXPECT_GT(met, 2000);
+  EXPECT_LT(met, 18000);
+}
+
+TEST(ConvexPolytope, SeparationProvesOnlyWhatHolds) {
+  const ConvexPolytope cube = *ConvexPolytope::from_mesh(unit_cube());
+  const std::vector<Vertex> beside = {{2, 0, 0}, {3, 1, 1}, {2.5, 0.5, 2}};  // all beyond x = 1
+  EXPECT_TRUE(cube.separated_from(beside));
+  const std::vector<Vertex> around = {{-1, 0.5, 0.5}, {2, 0.5, 0.5}};  // their hull crosses the cube
+  EXPECT_FALSE(cube.separated_from(around));
+}
+
+}  // namespace
+}  // namespace visproxy
