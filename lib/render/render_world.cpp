@@ -4,6 +4,7 @@
 #include <map>
 
 #include "core/errors.h"
+#include "trace/convex_polytope.h"
 #include "trace/embree_support.h"
 
 namespace visproxy {
@@ -85,6 +86,17 @@ bool segment_meets_box(const Vertex& from, const Vertex& to, const BoundingBox& 
   return t0 <= t1;
 }
 
+// A convex proxy of one instance, in world space, tested by clipping instead of Embree.
+struct ConvexInstance {
+  unsigned id = 0;
+  ConvexPolytope world;
+};
+
+bool filter_passes(std::size_t instance, const InstanceFilter& filter) {
+  return static_cast<int>(instance) != filter.skip && (filter.only < 0 || static_cast<int>(instance) == filter.only) &&
+         (filter.bits & instance_mask(instance)) != 0;
+}
+
 }  // namespace
 
 struct RenderWorld::Impl {
@@ -108,6 +120,9 @@ struct RenderWorld::Impl {
   std::vector<const TangentSides*> instance_sides;
   std::vector<const TriangleMesh*> instance_meshes;
   std::map<std::string, TangentSides> mesh_sides;
+  std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
+  std::vector<const ConvexPolytope*> outside_polytopes;  // per instance, into `convex`, or nullptr
+  std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
 
   ~Impl() {
     for (RTCScene scene : owned) rtcReleaseScene(scene);
@@ -140,7 +155,13 @@ struct RenderWorld::Impl {
     return scene;
   }
 
-  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask) {
+  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask,
+                    const std::optional<ConvexPolytope>& polytope = std::nullopt) {
+    if (polytope) {
+      convex[top].push_back({id, polytope->transformed(transform)});
+      return;
+    }
+    embree_masks[top] |= mask;
     if (counting) {
       auto& list = counted[top];
       list.resize(std::max<std::size_t>(list.size(), id + 1));
@@ -167,16 +188,33 @@ struct RenderWorld::Impl {
     device.throw_if_failed();
   }
 
+  // The instance bits a query may see. With more than 31 instances a skipped instance's bit
+  // is shared and stays set (the filter function then decides).
+  unsigned query_mask(const InstanceFilter& filter) const {
+    unsigned mask = kAllInstances & filter.bits;
+    if (filter.only >= 0) mask &= instance_mask(static_cast<std::size_t>(filter.only));
+    if (filter.skip >= 0 && instance_count <= 31) mask &= ~instance_mask(static_cast<std::size_t>(filter.skip));
+    return mask;
+  }
+
   bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
+    if (const auto it = convex.find(scene); it != convex.end())
+      for (const ConvexInstance& instance : it->second) {
+        if (!filter_passes(instance.id, filter)) continue;
+        if (counting) ++g_thread_counts.nodes, ++g_thread_counts.primitives;  // one solid, clipped
+        if (instance.world.meets_segment(from, to)) return true;
+      }
+    // No Embree call when every instance Embree holds here is filtered out (e.g. the only
+    // instance without a convex proxy is the one the query skips).
+    const auto masks = embree_masks.find(scene);
+    if (masks == embree_masks.end() || (masks->second & query_mask(filter)) == 0) return false;
     if (counting) {
       const auto it = counted.find(scene);
       if (it == counted.end()) return false;
       TraversalCounts& counts = g_thread_counts;
       for (std::size_t i = 0; i < it->second.size(); ++i) {
         const auto& instance = it->second[i];
-        if (!instance || static_cast<int>(i) == filter.skip || (filter.only >= 0 && static_cast<int>(i) != filter.only) ||
-            (filter.bits & instance_mask(i)) == 0)
-          continue;
+        if (!instance || !filter_passes(i, filter)) continue;
         ++counts.nodes;
         if (instance->world.empty() || !segment_meets_box(from, to, instance->world)) continue;
         if (instance->object->segment_blocked(instance->to_object * from, instance->to_object * to, counts)) return true;
@@ -187,9 +225,7 @@ struct RenderWorld::Impl {
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
     RTCRay ray = segment_ray(from, to);
-    ray.mask = kAllInstances & filter.bits;
-    if (filter.only >= 0) ray.mask &= instance_mask(static_cast<std::size_t>(filter.only));
-    if (filter.skip >= 0) ray.mask &= ~instance_mask(static_cast<std::size_t>(filter.skip));
+    ray.mask = query_mask(filter);
     const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
     context.context.filter = shared_bit ? instance_filter : nullptr;
     rtcOccluded1(scene, &context.context, &ray);
@@ -211,6 +247,15 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     shared.emplace(key, object);
     return object;
   };
+  // Closed convex proxies (boxes, bounded hulls) of few faces are clipped against instead.
+  std::map<std::string, std::optional<ConvexPolytope>> polytopes;  // "mesh\nspec"
+  auto polytope_for = [&](const std::string& mesh, const std::optional<InstanceProxy>& proxy) -> const std::optional<ConvexPolytope>& {
+    const std::string key = mesh + "\n" + (proxy ? proxy->spec : std::string("mesh"));
+    if (auto it = polytopes.find(key); it != polytopes.end()) return it->second;
+    const TriangleMesh& triangles = proxy ? proxy->mesh : scene.mesh(mesh).mesh;
+    const bool spheres = proxy && !proxy->spheres.empty();
+    return polytopes.emplace(key, spheres ? std::nullopt : ConvexPolytope::from_mesh(triangles)).first->second;
+  };
   w.instance_count = scene.instances.size();
   w.has_inside = false;
   for (const MeshProxies& p : proxies) w.has_inside = w.has_inside || p.inside.has_value();
@@ -224,9 +269,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const auto id = static_cast<unsigned>(i);
     const unsigned mask = instance_mask(i);
     w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, mask);
-    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, mask);
-    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, mask);
-    if (p.inside) w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, mask);
+    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, mask, polytope_for(instance.mesh, p.stochastic));
+    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, mask, polytope_for(instance.mesh, p.outside));
+    if (p.inside)
+      w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, mask, polytope_for(instance.mesh, p.inside));
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
     auto sides = w.mesh_sides.find(instance.mesh);
     if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(scene.mesh(instance.mesh).mesh)).first;
@@ -237,7 +283,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     for (const Vertex& v : points) world.extend(instance.transform * v);
     Sphere sphere{0.5 * (world.min + world.max), 0.0};
     for (const Vertex& v : points) sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
-    sphere.radius *= 1 + 1e-9;
+    sphere.radius *= 1 + 1e-6;  // beyond float rounding of Embree's triangle tests
     w.instance_bounds.push_back(world);
     w.instance_spheres.push_back(sphere);
     w.is_exact.push_back(!p.stochastic.has_value());
@@ -258,6 +304,9 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const unsigned id = attach_triangles(w.device, w.camera, lights, kLightMask);
     if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
   }
+  w.outside_polytopes.assign(scene.instances.size(), nullptr);
+  if (const auto it = w.convex.find(w.outside); it != w.convex.end())
+    for (const ConvexInstance& c : it->second) w.outside_polytopes[c.id] = &c.world;
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
   w.device.throw_if_failed();
 }
@@ -327,6 +376,8 @@ unsigned instance_bit(std::size_t instance) { return instance_mask(instance); }
 
 const BoundingBox& RenderWorld::instance_bounds(std::size_t instance) const { return impl_->instance_bounds[instance]; }
 const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return impl_->instance_spheres[instance]; }
+
+const ConvexPolytope* RenderWorld::outside_polytope(std::size_t instance) const { return impl_->outside_polytopes[instance]; }
 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }
