@@ -4,6 +4,8 @@
 
 #include "render/renderer.h"
 
+#include "core/errors.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -12,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 namespace visproxy {
@@ -96,44 +99,79 @@ class LightSampler {
 
 // The shaft from a point to every light: the convex hull of the point and the lights'
 // corners. meets() is conservative: false only when an instance is provably outside the
-// shaft: its box separated along a coordinate axis, or its bounding sphere outside the
-// circular cone around the shaft.
+// shaft: its box separated along a coordinate axis, its bounding sphere outside the
+// circular cone around the shaft, or a face plane of its convex outside proxy with the
+// whole shaft in front.
 class LightShaft {
  public:
   explicit LightShaft(const Scene& scene) {
+    points_.emplace_back(Vertex::Zero());  // the apex, set by from()
     for (const AreaLight& light : scene.lights)
-      for (const auto& t : light.triangles) corners_.insert(corners_.end(), t.begin(), t.end());
+      for (const auto& t : light.triangles)
+        for (const Vertex& corner : t)
+          if (std::find(points_.begin() + 1, points_.end(), corner) == points_.end()) points_.push_back(corner);
   }
-  bool meets(const Vertex& apex, const BoundingBox& box, const Sphere& sphere) const {
+
+  /// The shaft from one apex: its bounds, and its cone once an instance needs it.
+  struct From {
+    std::vector<Vertex> points;  ///< apex, then the lights' corners
+    Vertex lo, hi, axis;
+    bool has_cone = false;
+    double cos_half = -1, sin_half = 0, reach = 0;
+  };
+  void from(const Vertex& apex, From& shaft) const {
+    shaft.points = points_;
+    shaft.points[0] = apex;
+    shaft.lo = shaft.hi = apex;
+    for (const Vertex& c : shaft.points) shaft.lo = shaft.lo.cwiseMin(c), shaft.hi = shaft.hi.cwiseMax(c);
+    shaft.has_cone = false;
+  }
+
+  static bool meets(From& shaft, const BoundingBox& box, const Sphere& sphere, const ConvexPolytope* polytope) {
     if (box.empty()) return false;
     // Separating coordinate axes: the shaft's extent is that of its points.
-    Vertex lo = apex, hi = apex;
-    for (const Vertex& c : corners_) lo = lo.cwiseMin(c), hi = hi.cwiseMax(c);
-    if ((hi.array() < box.min.array()).any() || (lo.array() > box.max.array()).any()) return false;
-    // The cone from the apex around the corners against the box's bounding sphere.
-    Vertex axis = Vertex::Zero();
-    for (const Vertex& c : corners_) axis += (c - apex).normalized();
-    if (axis.norm() == 0) return true;
-    axis.normalize();
-    double cos_half = 1, reach = 0;
-    for (const Vertex& c : corners_) {
-      cos_half = std::min(cos_half, axis.dot((c - apex).normalized()));
-      reach = std::max(reach, (c - apex).norm());
-    }
-    if (cos_half <= 0) return true;  // wider than a half-space: no cone test
-    const Vertex centre = sphere.center;
-    const double radius = sphere.radius;
-    const Vertex v = centre - apex;
+    if ((shaft.hi.array() < box.min.array()).any() || (shaft.lo.array() > box.max.array()).any()) return false;
+    if (polytope && polytope->separated_from(shaft.points)) return false;
+    // The cone from the apex around the corners against the instance's bounding sphere.
+    if (!shaft.has_cone) cone(shaft);
+    if (shaft.cos_half <= 0) return true;  // wider than a half-space: no cone test
+    const Vertex v = sphere.center - shaft.points[0];
     const double distance = v.norm();
-    if (distance <= radius) return true;
-    if (distance - radius > reach) return false;
-    const double angle = std::acos(std::clamp(axis.dot(v) / distance, -1.0, 1.0));
-    return angle <= std::acos(cos_half) + std::asin(std::min(1.0, radius / distance));
+    if (distance <= sphere.radius) return true;
+    if (distance - sphere.radius > shaft.reach) return false;
+    // Within the cone grown by the sphere's angular radius beta: angle(axis, v) <= half + beta,
+    // compared through cosines (half + beta < pi here since both are below pi / 2).
+    const double sin_beta = sphere.radius / distance, cos_beta = std::sqrt(std::max(0.0, 1 - sin_beta * sin_beta));
+    const double cos_limit = shaft.cos_half * cos_beta - shaft.sin_half * sin_beta;
+    return shaft.axis.dot(v) / distance >= cos_limit - 1e-12;
   }
 
  private:
-  std::vector<Vertex> corners_;
+  static void cone(From& shaft) {
+    shaft.has_cone = true;
+    const Vertex& apex = shaft.points[0];
+    shaft.axis = Vertex::Zero();
+    for (std::size_t i = 1; i < shaft.points.size(); ++i) shaft.axis += (shaft.points[i] - apex).normalized();
+    shaft.cos_half = -1;
+    if (shaft.axis.norm() == 0) return;
+    shaft.axis.normalize();
+    shaft.cos_half = 1, shaft.reach = 0;
+    for (std::size_t i = 1; i < shaft.points.size(); ++i) {
+      shaft.cos_half = std::min(shaft.cos_half, shaft.axis.dot((shaft.points[i] - apex).normalized()));
+      shaft.reach = std::max(shaft.reach, (shaft.points[i] - apex).norm());
+    }
+    shaft.sin_half = std::sqrt(std::max(0.0, 1 - shaft.cos_half * shaft.cos_half));
+  }
+
+  std::vector<Vertex> points_;
 };
+
+bool segment_meets_sphere(const Vertex& from, const Vertex& to, const Sphere& sphere) {
+  const Vertex d = to - from;
+  const double length2 = d.squaredNorm();
+  const double t = length2 > 0 ? std::clamp((sphere.center - from).dot(d) / length2, 0.0, 1.0) : 0.0;
+  return (from + t * d - sphere.center).squaredNorm() <= sphere.radius * sphere.radius;
+}
 
 double scene_scale(const Scene& scene) {
   BoundingBox box;
@@ -148,6 +186,19 @@ double scene_scale(const Scene& scene) {
 }
 
 }  // namespace
+
+std::string_view stochastic_estimator_name(StochasticEstimator estimator) {
+  return estimator == StochasticEstimator::control_variate ? "control-variate" : "eq8";
+}
+
+std::string_view probability_mode_name(ProbabilityMode mode) {
+  switch (mode) {
+    case ProbabilityMode::equal: return "equal";
+    case ProbabilityMode::adaptive: return "adaptive";
+    case ProbabilityMode::learned: return "learned";
+  }
+  return "equal";
+}
 
 std::string_view visibility_mode_name(VisibilityMode mode) {
   switch (mode) {
@@ -171,6 +222,7 @@ nlohmann::json RenderStats::to_json() const {
           {"exact_tests_per_shadow_ray", static_cast<double>(exact_tests) / rays},
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
           {"stochastic_terms", {{"a_proxy_only", term_counts[0]}, {"b_mesh_if_proxy_hit", term_counts[1]}, {"c_mesh_if_proxy_missed", term_counts[2]}}},
+          {"control_variate_corrections", {{"after_proxy_missed", corrections_after_miss}, {"after_proxy_hit", corrections_after_hit}}},
           {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}, {"shading_points_with_culled_shaft", shafts_culled}}},
           {"counted", counted},
           {"traversal_steps", counted ? nlohmann::json(traversal_steps) : nlohmann::json(nullptr)},
@@ -179,18 +231,26 @@ nlohmann::json RenderStats::to_json() const {
           {"primitive_tests_per_shadow_ray", counted ? nlohmann::json(static_cast<double>(primitive_tests) / rays) : nlohmann::json(nullptr)}};
 }
 
+// With splitting, the own instance first (exactly); returns the filter for the rest of the
+// scene, or nullopt when the own instance blocks the segment.
+std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                 bool split, RenderStats& stats, bool own_cannot_block) {
+  InstanceFilter rest;
+  if (!split) return rest;
+  if (!own_cannot_block) {
+    ++stats.exact_tests;
+    if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return std::nullopt;
+  }
+  rest.skip = own_instance;
+  return rest;
+}
+
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
                              const Probabilities& p, double u, bool split, RenderStats& stats, bool own_cannot_block) {
-  InstanceFilter rest;
-  if (split) {
-    if (!own_cannot_block) {
-      ++stats.exact_tests;
-      if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return 0.0;
-    }
-    rest.skip = own_instance;
-  }
+  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (!rest) return 0.0;
   ++stats.proxy_tests;
-  const bool proxy_free = !world.proxy_blocks(from, to, rest);
+  const bool proxy_free = !world.proxy_blocks(from, to, *rest);
   if (u < p.p1) {
     ++stats.term_counts[0];
     return proxy_free ? 1.0 / p.p1 : 0.0;
@@ -199,12 +259,33 @@ double stochastic_visibility(const RenderWorld& world, const Vertex& from, const
     ++stats.term_counts[1];
     if (proxy_free) return 0.0;
     ++stats.exact_tests;
-    return world.mesh_blocks(from, to, rest) ? 0.0 : 1.0 / p.p2;
+    return world.mesh_blocks(from, to, *rest) ? 0.0 : 1.0 / p.p2;
   }
   ++stats.term_counts[2];
   if (!proxy_free) return 0.0;
   ++stats.exact_tests;
-  return world.mesh_blocks(from, to, rest) ? -1.0 / p.p3 : 0.0;
+  return world.mesh_blocks(from, to, *rest) ? -1.0 / p.p3 : 0.0;
+}
+
+ControlVariateSample control_variate_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
+                                                bool own_cannot_block) {
+  ControlVariateSample sample;
+  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (!rest) return sample;
+  ++stats.proxy_tests;
+  sample.proxy_traced = true;
+  sample.proxy_blocked = world.proxy_blocks(from, to, *rest);
+  const double proxy = sample.proxy_blocked ? 0.0 : 1.0;
+  sample.trace_probability = sample.proxy_blocked ? q.after_hit : q.after_miss;
+  sample.visibility = proxy;
+  if (!(u < sample.trace_probability)) return sample;
+  ++(sample.proxy_blocked ? stats.corrections_after_hit : stats.corrections_after_miss);
+  ++stats.exact_tests;
+  sample.mesh_traced = true;
+  sample.mesh_blocked = world.mesh_blocks(from, to, *rest);
+  sample.visibility = proxy + ((sample.mesh_blocked ? 0.0 : 1.0) - proxy) / sample.trace_probability;
+  return sample;
 }
 
 std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
@@ -256,6 +337,16 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 
   std::vector<Color> sum(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), Color::Zero());
   std::vector<double> p1_sum(sum.size(), 0.0), p1_count(sum.size(), 0.0), tests(sum.size(), 0.0);
+  const bool control_variate = stochastic && options.estimator == StochasticEstimator::control_variate;
+  if (stochastic && options.probabilities == ProbabilityMode::learned && !control_variate)
+    throw Error("render: learned probabilities need the control-variate estimator");
+  const CorrectionOptions correction_options{.scale = options.correction_scale, .floor = options.probability_floor};
+  // adaptive with probe_passes > 0: the ray types each pixel's probes saw so far.
+  std::vector<RayTypeCounts> pixel_probes(options.probe_passes > 0 ? sum.size() : 0);
+  // bounds: passes in a row in which a proof of the rest of the scene failed, per pixel.
+  std::vector<std::uint8_t> proof_failures(options.visibility == VisibilityMode::bounds ? sum.size() : 0, 0);
+  // learned: what each pixel's traced corrections showed so far.
+  std::vector<CorrectionEvidence> pixel_evidence(stochastic && options.probabilities == ProbabilityMode::learned ? sum.size() : 0);
   tbb::enumerable_thread_specific<RenderStats> thread_stats;
 
   auto shade = [&](int px, int py, int pass) {
@@ -290,36 +381,55 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     const Vertex x = hit->position + offset * hit->normal;
     const Color brdf = scene.instances[static_cast<std::size_t>(own)].albedo / std::numbers::pi;
 
-    Probabilities probabilities = equal_probabilities(kinds[static_cast<std::size_t>(own)]);
+    const ProxyKind kind = kinds[static_cast<std::size_t>(own)];
+    Probabilities probabilities = equal_probabilities(kind);
+    CorrectionProbabilities corrections = equal_correction_probabilities(kind);
     if (stochastic && options.probabilities == ProbabilityMode::adaptive) {
-      RayTypeCounts counts;
-      const InstanceFilter rest{.skip = options.split ? own : -1, .only = -1};
-      for (int k = 0; k < options.probe_rays; ++k) {
-        const LightSample y = lights.sample(random);
-        if (hit->normal.dot(y.position - x) <= 0) continue;  // below the surface: never traced
-        ++stats.probe_rays;
-        counts.add(world.mesh_blocks(x, y.position, rest), world.proxy_blocks(x, y.position, rest));
+      // Probe rays of this shading point, or (probe_passes > 0) of this pixel's first passes.
+      RayTypeCounts local;
+      RayTypeCounts& counts = options.probe_passes > 0 ? pixel_probes[pixel] : local;
+      if (options.probe_passes == 0 || pass < options.probe_passes) {
+        const InstanceFilter rest{.skip = options.split ? own : -1, .only = -1};
+        for (int k = 0; k < options.probe_rays; ++k) {
+          const LightSample y = lights.sample(random);
+          if (hit->normal.dot(y.position - x) <= 0) continue;  // below the surface: never traced
+          ++stats.probe_rays;
+          counts.add(world.mesh_blocks(x, y.position, rest), world.proxy_blocks(x, y.position, rest));
+        }
       }
       const RayTypeFractions fractions = RayTypeFractions::from(counts);
-      const ProxyKind kind = kinds[static_cast<std::size_t>(own)];
-      probabilities = optimal_probabilities(kind, fractions, {.floor = options.probability_floor});
-      if (options.cost_heuristic)
-        probabilities = apply_cost_heuristic(kind, probabilities, fractions, options.probability_floor);
+      if (control_variate) {
+        corrections = correction_probabilities(kind, CorrectionEvidence::from(counts), correction_options);
+      } else {
+        probabilities = optimal_probabilities(kind, fractions, {.floor = options.probability_floor});
+        if (options.cost_heuristic)
+          probabilities = apply_cost_heuristic(kind, probabilities, fractions, options.probability_floor);
+      }
     }
-    if (stochastic) {
+    if (control_variate && options.probabilities == ProbabilityMode::learned)
+      corrections = correction_probabilities(kind, pixel_evidence[pixel], correction_options);
+    if (stochastic && !control_variate) {
       p1_sum[pixel] += probabilities.p1;
       p1_count[pixel] += 1;
     }
 
     // bounds: the instances (other than the own) that the shaft from x to the lights meets.
-    unsigned shaft_bits = 0;
+    thread_local std::vector<std::size_t> shaft_instances;
+    thread_local LightShaft::From shaft_from;
+    shaft_instances.clear();
+    bool traced_before = false;  // a proof failed here: the next segments go straight to the exact query
+    bool proof_failed = false, proof_tried = false;
     if (options.visibility == VisibilityMode::bounds) {
+      shaft.from(x, shaft_from);
       for (std::size_t i = 0; i < scene.instances.size(); ++i)
-        if (static_cast<int>(i) != own && shaft.meets(x, world.instance_bounds(i), world.instance_sphere(i))) shaft_bits |= instance_bit(i);
-      if (shaft_bits == 0) ++stats.shafts_culled;
+        if (static_cast<int>(i) != own &&
+            LightShaft::meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i), world.outside_polytope(i)))
+          shaft_instances.push_back(i);
+      if (shaft_instances.empty()) ++stats.shafts_culled;
+      // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
+      traced_before = proof_failures[pixel] >= 2 && pass % 8 != 0;
     }
 
-    bool traced_before = false;
     Color radiance = Color::Zero();
     for (int s = 0; s < options.shadow_rays; ++s) {
       const LightSample y = lights.sample(random);
@@ -338,6 +448,20 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
           break;
         case VisibilityMode::stochastic:
+          if (control_variate) {
+            const ControlVariateSample sample = control_variate_visibility(world, x, y.position, own, corrections, random.uniform(),
+                                                                           options.split, stats, hit->own_mesh_behind);
+            visibility = sample.visibility;
+            if (sample.proxy_traced) {
+              p1_sum[pixel] += 1 - sample.trace_probability;
+              p1_count[pixel] += 1;
+            }
+            if (sample.mesh_traced && !pixel_evidence.empty()) {
+              pixel_evidence[pixel].add(sample.proxy_blocked, sample.mesh_blocked);
+              corrections = correction_probabilities(kind, pixel_evidence[pixel], correction_options);
+            }
+            break;
+          }
           visibility = stochastic_visibility(world, x, y.position, own, probabilities, random.uniform(), options.split, stats,
                                              hit->own_mesh_behind);
           break;
@@ -348,10 +472,15 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           // free, the own instance is traced unless it lies behind the tangent plane.
           // After a segment from this point needed the exact query, the next ones go straight
           // to it: the proxies rarely prove anything where they just failed to.
-          const InstanceFilter rest{.skip = own, .only = -1, .bits = shaft_bits};
-          bool rest_free = shaft_bits == 0;
+          // Only the instances in the shaft whose bounding sphere this segment meets can block it.
+          unsigned bits = 0;
+          for (const std::size_t i : shaft_instances)
+            if (segment_meets_sphere(x, y.position, world.instance_sphere(i))) bits |= instance_bit(i);
+          const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
+          bool rest_free = bits == 0;
           if (!rest_free && !traced_before) {
             ++stats.proxy_tests;
+            proof_tried = true;
             rest_free = !world.outside_blocks(x, y.position, rest);
           }
           if (rest_free) {
@@ -370,6 +499,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
               break;
             }
           }
+          proof_failed = proof_failed || !traced_before;
           traced_before = true;
           ++stats.bounds_traced;
           ++stats.exact_tests;
@@ -379,6 +509,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       }
       if (visibility != 0) radiance += (visibility * cos_x * cos_y / distance2 * lights.total_area()) * y.radiance;
     }
+    if (proof_tried) proof_failures[pixel] = proof_failed ? static_cast<std::uint8_t>(std::min(proof_failures[pixel] + 1, 255)) : 0;
     sum[pixel] += brdf.cwiseProduct(radiance) / options.shadow_rays;
   };
 
@@ -415,6 +546,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     r.camera_samples += s.camera_samples, r.shading_points += s.shading_points, r.shadow_rays += s.shadow_rays;
     r.exact_tests += s.exact_tests, r.proxy_tests += s.proxy_tests, r.probe_rays += s.probe_rays;
     for (int i = 0; i < 3; ++i) r.term_counts[i] += s.term_counts[i];
+    r.corrections_after_miss += s.corrections_after_miss, r.corrections_after_hit += s.corrections_after_hit;
     r.bounds_unoccluded += s.bounds_unoccluded, r.bounds_occluded += s.bounds_occluded, r.bounds_traced += s.bounds_traced;
     r.traversal_steps += s.traversal_steps, r.primitive_tests += s.primitive_tests;
     r.shafts_culled += s.shafts_culled;

@@ -15,15 +15,28 @@
 namespace visproxy {
 
 enum class VisibilityMode { exact, stochastic, bounds };
-enum class ProbabilityMode { equal, adaptive };
+/// equal; adaptive: from K probe rays per shading point (or per pixel, probe_passes);
+/// learned (control variate only): from the corrections each pixel traced in earlier samples.
+enum class ProbabilityMode { equal, adaptive, learned };
+std::string_view probability_mode_name(ProbabilityMode mode);
+/// How `stochastic` combines proxy and mesh: eq. 8 (a term drawn first, the paper), or the
+/// proxy as a control variate corrected under Russian roulette (CorrectionProbabilities).
+enum class StochasticEstimator { term_choice, control_variate };
+std::string_view stochastic_estimator_name(StochasticEstimator estimator);
 std::string_view visibility_mode_name(VisibilityMode mode);
 
 struct RenderOptions {
   VisibilityMode visibility = VisibilityMode::exact;
   ProbabilityMode probabilities = ProbabilityMode::equal;
-  bool cost_heuristic = false;     ///< eq. 22-24 on the adaptive probabilities
+  StochasticEstimator estimator = StochasticEstimator::term_choice;
+  bool cost_heuristic = false;     ///< eq. 22-24 on the adaptive probabilities (eq. 8 only)
   int probe_rays = 16;             ///< K: probe segments per shading point (adaptive)
-  double probability_floor = 0.05; ///< least probability of each needed term (adaptive)
+  /// adaptive: 0 probes every shading point (the paper); P > 0 probes only in each pixel's
+  /// first P passes and keeps the ray types seen per pixel for every later pass, which
+  /// stays unbiased (a pass's probabilities depend only on draws made before its shadow rays).
+  int probe_passes = 0;
+  double probability_floor = 0.05; ///< least probability of each needed term (adaptive, learned)
+  double correction_scale = 2;     ///< control variate, adaptive or learned: CorrectionOptions::scale
   bool split = true;               ///< eq. 27: the shading point's own instance traced exactly
   int spp = 16;                    ///< camera samples per pixel (passes)
   int shadow_rays = 1;             ///< M: light samples per camera sample
@@ -40,7 +53,9 @@ struct RenderStats {
   std::uint64_t exact_tests = 0;  ///< segment queries against exact meshes
   std::uint64_t proxy_tests = 0;  ///< segment queries against proxies
   std::uint64_t probe_rays = 0;   ///< adaptive probe segments (each tests proxy and mesh)
-  std::uint64_t term_counts[3] = {0, 0, 0};  ///< stochastic: times terms (a), (b), (c) were chosen
+  std::uint64_t term_counts[3] = {0, 0, 0};  ///< stochastic eq. 8: times terms (a), (b), (c) were chosen
+  /// stochastic control variate: exact corrections traced after the proxy missed / was hit
+  std::uint64_t corrections_after_miss = 0, corrections_after_hit = 0;
   std::uint64_t bounds_unoccluded = 0, bounds_occluded = 0, bounds_traced = 0;
   std::uint64_t shafts_culled = 0;  ///< bounds: shading points whose light shaft missed every other instance
   bool counted = false;               ///< the world was a counting one: the two below are set
@@ -51,7 +66,9 @@ struct RenderStats {
 
 struct RenderResult {
   Image image;     ///< linear radiance
-  Image p1_map;    ///< per pixel mean p1 of the stochastic estimator (grey), else empty
+  /// Stochastic only (else empty), grey: per pixel the mean probability that a shadow ray
+  /// traces the proxy alone (eq. 8: p1; control variate: 1 - q of the proxy's answer).
+  Image p1_map;
   Image cost_map;  ///< per pixel per camera sample: traversal steps + primitive tests when counted, else segment queries
   RenderStats stats;
 };
@@ -60,9 +77,6 @@ struct RenderResult {
 /// by (seed, pixel, pass), so the image does not depend on the number of threads.
 RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options);
 
-/// The irradiance-based estimate for one shading point's shadow segment, exposed for
-/// tests: eq. 8 with the given probabilities. `u` chooses the term. Returns the estimate
-/// and counts tests into `stats`.
 /// Shadow segments as a renderer traces them, for measuring proxies on a scene: from points
 /// the camera sees (uniform over the image, jittered) to points sampled on the lights by
 /// area, the segments a Lambertian surface would trace (light in front of both). Points on
@@ -74,10 +88,25 @@ struct ShadowSegment {
 std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
                                                  std::uint64_t seed, const std::vector<bool>& exclude);
 
-/// With `split`, the own instance is traced exactly first, unless `own_cannot_block`
-/// (SurfaceHit::own_mesh_behind).
+/// The stochastic visibility of one shadow segment, eq. 8 with the given probabilities;
+/// `u` in [0, 1) chooses the term. Counts its queries into `stats`. With `split`, the own
+/// instance is traced exactly first, unless `own_cannot_block` (SurfaceHit::own_mesh_behind),
+/// and the rest of the scene stochastically.
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
                              const Probabilities& probabilities, double u, bool split, RenderStats& stats,
                              bool own_cannot_block = false);
+
+/// One shadow segment through the control-variate estimator: V' + (V - V') [u < q] / q.
+struct ControlVariateSample {
+  double visibility = 0;
+  bool proxy_traced = false;  ///< false when the own instance blocked the segment first
+  bool proxy_blocked = false;
+  double trace_probability = 0;  ///< the q the proxy's answer chose
+  bool mesh_traced = false;
+  bool mesh_blocked = false;
+};
+ControlVariateSample control_variate_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
+                                                bool own_cannot_block = false);
 
 }  // namespace visproxy
