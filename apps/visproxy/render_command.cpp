@@ -22,10 +22,13 @@ struct RenderCommandOptions {
   std::filesystem::path output;
   VisibilityMode visibility = VisibilityMode::exact;
   ProbabilityMode probabilities = ProbabilityMode::equal;
+  StochasticEstimator estimator = StochasticEstimator::term_choice;
+  int probe_passes = 0;
   bool cost_heuristic = false;
   bool no_split = false;
   int probe_rays = 16;
   double probability_floor = 0.05;
+  double correction_scale = 2;
   int spp = 16;
   int shadow_rays = 1;
   std::uint64_t seed = 1;
@@ -53,8 +56,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
       "Render a scene with direct illumination from its area lights (Lambertian surfaces, M shadow rays per camera "
       "sample). Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
       "names that are not in the cache yet.");
-  command->add_option("scene", o->scene, "Scene file (JSON; format in data/scenes/README.md)")->required();
-  command->add_option("-o,--output", o->output, "Output image, .pfm")->required();
+  command->add_option("scene", o->scene, "Scene file (JSON; format in README.md, schema data/schemas/scene.schema.json)")->required();
+  command->add_option("-o,--output", o->output, "Output image: .pfm or .exr (linear radiance)")->required();
   const std::map<std::string, VisibilityMode> modes{
       {"exact", VisibilityMode::exact}, {"stochastic", VisibilityMode::stochastic}, {"bounds", VisibilityMode::bounds}};
   command
@@ -62,19 +65,36 @@ void add_render_command(CLI::App& app, int& exit_code) {
                    "exact: every shadow ray against the meshes; stochastic: the unbiased estimator with each instance's "
                    "proxy (own instance exact); bounds: exact answer, proxies only skip work [default: exact]")
       ->transform(CLI::CheckedTransformer(modes, CLI::ignore_case));
-  const std::map<std::string, ProbabilityMode> probability_modes{{"equal", ProbabilityMode::equal},
-                                                                 {"adaptive", ProbabilityMode::adaptive}};
+  const std::map<std::string, ProbabilityMode> probability_modes{
+      {"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}};
   command
       ->add_option("--probabilities", o->probabilities,
-                   "stochastic: equal, or adaptive (optimal for each shading point from K probe rays) [default: equal]")
+                   "stochastic: equal; adaptive (for each shading point from K probe rays); learned (control-variate only: "
+                   "from the corrections each pixel traced before, no probe rays) [default: equal]")
       ->transform(CLI::CheckedTransformer(probability_modes, CLI::ignore_case));
-  command->add_flag("--cost-heuristic", o->cost_heuristic, "stochastic, adaptive: favour the proxy where it agrees with the mesh (eq. 22-24)");
+  const std::map<std::string, StochasticEstimator> estimators{{"eq8", StochasticEstimator::term_choice},
+                                                              {"control-variate", StochasticEstimator::control_variate}};
+  command
+      ->add_option("--estimator", o->estimator,
+                   "stochastic: eq8 (the paper: a term drawn with p1, p2, p3, then traced), or control-variate (the proxy "
+                   "always traced, its answer corrected by the mesh with a probability its answer chooses; no exact query "
+                   "after an outside proxy's miss or an inside proxy's hit) [default: eq8]")
+      ->transform(CLI::CheckedTransformer(estimators, CLI::ignore_case));
+  command->add_flag("--cost-heuristic", o->cost_heuristic, "stochastic eq8, adaptive: favour the proxy where it agrees with the mesh (eq. 22-24)");
+  command->add_option("--probe-passes", o->probe_passes,
+                      "adaptive: 0 probes every shading point; P > 0 probes only in each pixel's first P passes and "
+                      "keeps the ray types seen per pixel for the later passes [default: 0]")
+      ->check(CLI::Range(0, 1 << 24));
   command->add_flag("--no-split", o->no_split, "stochastic: estimate the shading point's own instance too, instead of tracing it exactly");
   command->add_option("--probe-rays", o->probe_rays, "adaptive: probe rays per shading point (K) [default: 16]")->check(CLI::Range(1, 4096));
   command->add_option("--probability-floor", o->probability_floor,
                       "adaptive: least probability of each term the proxy kind needs, which keeps the estimate unbiased "
                       "when the probes miss a ray type [default: 0.05]")
       ->check(CLI::Range(0.0, 0.33));
+  command->add_option("--correction-scale", o->correction_scale,
+                      "control-variate, adaptive or learned: trace the mesh with probability min(1, scale x sqrt(p)) where "
+                      "the proxy's answer is wrong with probability p [default: 2]")
+      ->check(CLI::Range(0.01, 1000.0));
   command->add_option("--spp", o->spp, "Camera samples per pixel [default: 16]")->check(CLI::Range(1, 1 << 24));
   command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample (M) [default: 1]")->check(CLI::Range(1, 4096));
   command->add_option("--seed", o->seed, "Seed of the image's random streams and of proxy builds [default: 1]");
@@ -89,11 +109,14 @@ void add_render_command(CLI::App& app, int& exit_code) {
                     "Trace shadow rays with visproxy's own traversal of Embree-built BVHs and count traversal steps and "
                     "primitive tests (deterministic cost; slower than Embree's traversal)");
   command->add_flag("--maps", o->maps, "Also write OUT.cost.png (per camera sample: traversal steps + primitive tests with --count, else segment queries; "
-                    "white = the most) and, for stochastic, OUT.p1.png (p1 of the estimator, white = 1)");
+                    "white = the most) and, for stochastic, OUT.p1.png (the chance a shadow ray traces the proxy alone: p1 of eq. 8, "
+                    "1 - q of the control variate; white = 1)");
 
   command->callback([o, &exit_code] {
-    if (o->output.extension() != ".pfm")
-      throw InvalidInputError(o->output, "unsupported image format (use .pfm; a PNG is written beside it)");
+    if (o->probabilities == ProbabilityMode::learned && o->estimator != StochasticEstimator::control_variate)
+      throw CLI::ValidationError("--probabilities", "learned needs --estimator control-variate");
+    if (!is_linear_image_path(o->output))
+      throw InvalidInputError(o->output, "unsupported image format (use .pfm or .exr; a PNG is written beside it)");
     const bool terminal = ::isatty(STDERR_FILENO);
     Scene scene = load_scene(o->scene);
     if (o->width > 0) scene.camera.width = o->width;
@@ -113,9 +136,12 @@ void add_render_command(CLI::App& app, int& exit_code) {
     const RenderWorld world(scene, proxies, o->count);
     RenderOptions options{.visibility = o->visibility,
                           .probabilities = o->probabilities,
+                          .estimator = o->estimator,
                           .cost_heuristic = o->cost_heuristic,
                           .probe_rays = o->probe_rays,
+                          .probe_passes = o->probe_passes,
                           .probability_floor = o->probability_floor,
+                          .correction_scale = o->correction_scale,
                           .split = !o->no_split,
                           .spp = o->spp,
                           .shadow_rays = o->shadow_rays,
@@ -137,7 +163,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
       std::filesystem::create_directories(o->output.parent_path(), error);
       if (error) throw IOError(o->output.parent_path(), "cannot create the output folder: " + error.message());
     }
-    write_pfm(o->output, result.image);
+    write_linear_image(o->output, result.image);
     const std::filesystem::path png = beside(o->output, ".png"), stats = beside(o->output, ".stats.json");
     write_png(png, result.image, o->exposure);
     if (o->maps) {
@@ -158,11 +184,14 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"width", scene.camera.width},
         {"height", scene.camera.height},
         {"visibility", visibility_mode_name(o->visibility)},
-        {"probabilities", o->probabilities == ProbabilityMode::adaptive ? "adaptive" : "equal"},
+        {"probabilities", probability_mode_name(o->probabilities)},
+        {"estimator", stochastic_estimator_name(o->estimator)},
         {"cost_heuristic", o->cost_heuristic},
+        {"probe_passes", o->probe_passes},
         {"split", !o->no_split},
         {"probe_rays", o->probe_rays},
         {"probability_floor", o->probability_floor},
+        {"correction_scale", o->correction_scale},
         {"spp_requested", o->spp},
         {"shadow_rays_per_sample", o->shadow_rays},
         {"seed", o->seed},
