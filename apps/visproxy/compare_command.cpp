@@ -1,10 +1,11 @@
-// visproxy compare SCENE [-o DIR] [--seconds T] [--reference REF.pfm] ...
+// visproxy compare SCENE [-o DIR] [--seconds T] [--reference REF.pfm|REF.exr] ...
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -22,21 +23,35 @@ namespace {
 
 struct CompareOptions {
   std::filesystem::path scene, folder, reference, cache;
+  std::vector<std::string> proxies;
   double seconds = 10;
   int reference_spp = 4096;
   int shadow_rays = 1;
   std::uint64_t seed = 1;
   int width = 0, height = 0;
   int convergence_points = 4;
+  int count_passes = 4;
   bool no_count = false;
 };
 
 struct Mode {
   std::string name;
+  std::string proxy;  ///< the stochastic proxy spec; empty for exact and bounds
   RenderOptions options;
 };
 
-std::vector<Mode> modes(const CompareOptions& o) {
+// The stochastic proxy specs to compare: --proxy, else every spec the instances name, in
+// the order they first appear.
+std::vector<std::string> stochastic_specs(const Scene& scene, const CompareOptions& o) {
+  if (!o.proxies.empty()) return o.proxies;
+  std::vector<std::string> specs;
+  for (const SceneInstance& instance : scene.instances)
+    for (const std::string& spec : instance.proxies)
+      if (std::find(specs.begin(), specs.end(), spec) == specs.end()) specs.push_back(spec);
+  return specs;
+}
+
+std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOptions& o) {
   auto base = [&](VisibilityMode v) {
     RenderOptions r;
     r.visibility = v;
@@ -45,14 +60,21 @@ std::vector<Mode> modes(const CompareOptions& o) {
     r.seed = o.seed;
     return r;
   };
-  std::vector<Mode> out{{"exact", base(VisibilityMode::exact)}, {"bounds", base(VisibilityMode::bounds)}};
-  RenderOptions equal = base(VisibilityMode::stochastic);
-  out.push_back({"stochastic equal", equal});
-  RenderOptions adaptive = equal;
-  adaptive.probabilities = ProbabilityMode::adaptive;
-  out.push_back({"stochastic adaptive", adaptive});
-  adaptive.cost_heuristic = true;
-  out.push_back({"stochastic adaptive + cost heuristic", adaptive});
+  std::vector<Mode> out{{"exact", "", base(VisibilityMode::exact)}, {"bounds", "", base(VisibilityMode::bounds)}};
+  for (const std::string& spec : specs) {
+    RenderOptions equal = base(VisibilityMode::stochastic);
+    out.push_back({spec + " eq8 equal", spec, equal});
+    RenderOptions adaptive = equal;
+    adaptive.probabilities = ProbabilityMode::adaptive;
+    out.push_back({spec + " eq8 adaptive", spec, adaptive});
+    adaptive.cost_heuristic = true;
+    out.push_back({spec + " eq8 adaptive + cost heuristic", spec, adaptive});
+    RenderOptions control = equal;
+    control.estimator = StochasticEstimator::control_variate;
+    out.push_back({spec + " control variate equal", spec, control});
+    control.probabilities = ProbabilityMode::learned;
+    out.push_back({spec + " control variate learned", spec, control});
+  }
   return out;
 }
 
@@ -64,8 +86,27 @@ std::string format_number(double value) {
 
 std::string file_stem(const std::string& name) {
   std::string stem;
-  for (char c : name) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
+  for (char c : name) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (keep || (!stem.empty() && stem.back() != '-')) stem += keep ? c : '-';
+  }
+  while (!stem.empty() && stem.back() == '-') stem.pop_back();
   return stem;
+}
+
+// One line redrawn in place on a terminal: the mode, its budget and how far it got.
+void draw_progress(const std::string& label, double fraction, int passes, double seconds) {
+  const int filled = static_cast<int>(30 * std::clamp(fraction, 0.0, 1.0));
+  std::fprintf(stderr, "\r\033[Kvisproxy compare: %s [%s%s] %3.0f%% %d spp %.1f s", label.c_str(),
+               std::string(static_cast<std::size_t>(filled), '#').c_str(), std::string(static_cast<std::size_t>(30 - filled), '.').c_str(),
+               100 * std::clamp(fraction, 0.0, 1.0), passes, seconds);
+}
+
+// Per pixel root of the squared error (mean over channels), white at `white`.
+void write_error_png(const std::filesystem::path& path, const Image& image, const Image& reference, double white) {
+  Image map = squared_error_map(image, reference);
+  for (Color& c : map.pixels) c = c.cwiseSqrt();
+  write_png(path, map, white > 0 ? 1.0 / white : 1.0);
 }
 
 }  // namespace
@@ -76,12 +117,15 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       "compare",
       "Render a scene with every visibility mode at equal time against a high-sample exact reference and write the "
       "comparison (Billen et al. Tables 5/6, Figure 8): DIR/table.md and table.csv (time, samples and shadow rays per "
-      "pixel, exact and proxy tests per pixel, MSE, efficiency 1/(MSE x time)), DIR/convergence.csv and .svg (MSE "
-      "against time), and every image.");
+      "pixel, exact and proxy tests, traversal steps and primitive tests per pixel, MSE, efficiency 1/(MSE x time) and "
+      "its ratio to exact), DIR/convergence.csv and .svg (MSE against time), and every image with its error map.");
   command->add_option("scene", o->scene, "Scene file")->required();
   command->add_option("-o,--output", o->folder, "Output folder [default: compare-SCENENAME]");
+  command->add_option("--proxy", o->proxies,
+                      "Stochastic proxy spec to compare (repeatable) [default: every spec the scene's instances name]");
   command->add_option("--seconds", o->seconds, "Time per mode for the table [default: 10]")->check(CLI::Range(0.01, 1e6));
-  command->add_option("--reference", o->reference, "Reference image (.pfm); rendered exactly with --reference-spp when absent");
+  command->add_option("--reference", o->reference,
+                      "Reference image (.pfm or .exr); rendered exactly with --reference-spp when absent");
   command->add_option("--reference-spp", o->reference_spp, "Samples per pixel of the rendered reference [default: 4096]")
       ->check(CLI::Range(1, 1 << 20));
   command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample in every mode [default: 1]")->check(CLI::Range(1, 4096));
@@ -89,49 +133,73 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   command->add_option("--convergence-points", o->convergence_points,
                       "Time budgets per mode for the MSE-against-time curve, halving from --seconds [default: 4]")
       ->check(CLI::Range(1, 12));
-  command->add_flag("--no-count", o->no_count,
-                    "Skip the counted re-render of each mode (same samples and seed, visproxy's own BVH traversal) that "
-                    "gives the table's traversal steps and primitive tests");
+  command->add_option("--count-passes", o->count_passes,
+                      "Passes of each mode re-rendered with visproxy's own BVH traversal (same seed) to count traversal "
+                      "steps and primitive tests; the table scales them to the passes the mode reached (modes with learned "
+                      "probabilities are counted in full) [default: 4]")
+      ->check(CLI::Range(1, 1 << 20));
+  command->add_flag("--no-count", o->no_count, "Skip the counted re-renders (traversal steps and primitive tests: nan)");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: as for render]");
   command->add_option("--width", o->width, "Override the camera's image width")->check(CLI::Range(1, 16384));
   command->add_option("--height", o->height, "Override the camera's image height")->check(CLI::Range(1, 16384));
 
   command->callback([o, &exit_code] {
+    if (!o->reference.empty() && !is_linear_image_path(o->reference))
+      throw InvalidInputError(o->reference, "unsupported image format (use .pfm or .exr)");
     Scene scene = load_scene(o->scene);
     if (o->width > 0) scene.camera.width = o->width;
     if (o->height > 0) scene.camera.height = o->height;
     const std::filesystem::path folder = o->folder.empty() ? std::filesystem::path("compare-" + o->scene.stem().string()) : o->folder;
+    Image reference;
+    if (!o->reference.empty()) {
+      reference = read_linear_image(o->reference);
+      if (reference.width != scene.camera.width || reference.height != scene.camera.height)
+        throw InvalidInputError(o->reference, "is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
+                                                  "; the scene renders " + std::to_string(scene.camera.width) + "x" +
+                                                  std::to_string(scene.camera.height));
+    }
     std::error_code error;
     std::filesystem::create_directories(folder, error);
     if (error) throw IOError(folder, "cannot create the output folder: " + error.message());
     const bool terminal = ::isatty(STDERR_FILENO);
 
-    const std::vector<MeshProxies> proxies = prepare_scene_proxies(
-        scene, {.cache = o->cache.empty() ? default_proxy_cache() : o->cache, .stochastic_spec = std::nullopt, .seed = o->seed,
-                .on_proxy = [](std::string_view mesh, std::string_view spec, bool cached) {
-                  if (!cached) std::cerr << "visproxy compare: building " << spec << " of " << mesh << "\n";
-                }});
-    const RenderWorld world(scene, proxies);
-    std::unique_ptr<RenderWorld> counting;
-    if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, true);
+    SceneProxyOptions proxy_options{.cache = o->cache.empty() ? default_proxy_cache() : o->cache,
+                                    .stochastic_spec = std::nullopt,
+                                    .seed = o->seed,
+                                    .on_proxy = [](std::string_view mesh, std::string_view spec, bool cached) {
+                                      if (!cached) std::cerr << "visproxy compare: building " << spec << " of " << mesh << "\n";
+                                    }};
+    const std::vector<std::string> specs = stochastic_specs(scene, *o);
+    const std::vector<Mode> all_modes = modes(specs, *o);
 
-    Image reference;
+    // The worlds of one stochastic proxy at a time (exact and bounds use the scene's first).
+    std::string world_spec = "\n";
+    std::unique_ptr<RenderWorld> world, counting;
+    auto use_world = [&](const std::string& spec) {
+      if (world && spec == world_spec) return;
+      counting.reset();
+      world.reset();
+      proxy_options.stochastic_spec = spec.empty() ? std::nullopt : std::optional<std::string>(spec);
+      const std::vector<MeshProxies> proxies = prepare_scene_proxies(scene, proxy_options);
+      world = std::make_unique<RenderWorld>(scene, proxies);
+      if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, true);
+      world_spec = spec;
+    };
+    use_world("");
+
     std::string reference_note;
     if (!o->reference.empty()) {
-      reference = read_pfm(o->reference);
-      if (reference.width != scene.camera.width || reference.height != scene.camera.height)
-        throw InvalidInputError(o->reference, "is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
-                                                  "; the scene renders " + std::to_string(scene.camera.width) + "x" +
-                                                  std::to_string(scene.camera.height));
       reference_note = "reference " + o->reference.string();
     } else {
-      std::cerr << "visproxy compare: rendering the exact reference (" << o->reference_spp << " spp x " << o->shadow_rays
-                << " shadow rays)\n";
       RenderOptions r;
       r.spp = o->reference_spp;
       r.shadow_rays = o->shadow_rays;
       r.seed = o->seed + 1000003;
-      const RenderResult result = render(scene, world, r);
+      const std::string label = "exact reference, " + std::to_string(o->reference_spp) + " spp";
+      if (terminal) r.on_pass = [&](int passes, double seconds) { draw_progress(label, double(passes) / r.spp, passes, seconds); };
+      else std::cerr << "visproxy compare: rendering the " << label << "\n";
+      const RenderResult result = render(scene, *world, r);
+      if (terminal) std::fprintf(stderr, "\n");
       reference = result.image;
       write_pfm(folder / "reference.pfm", reference);
       write_png(folder / "reference.png", reference);
@@ -146,58 +214,84 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                      " shadow ray(s) per camera sample, seed " + std::to_string(o->seed) + ", equal time " +
                      format_number(o->seconds) + " s per mode; " + reference_note + ".\n\n";
     md += "| mode | time (s) | samples per pixel | shadow rays per pixel | exact tests per pixel | proxy tests per pixel | "
-          "traversal steps per pixel | primitive tests per pixel | MSE | efficiency 1/(MSE x s) |\n";
-    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-    std::string csv = "mode,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,"
-                      "traversal_steps_per_pixel,primitive_tests_per_pixel,mse,efficiency\n";
+          "traversal steps per pixel | primitive tests per pixel | MSE | efficiency 1/(MSE x s) | efficiency / exact |\n";
+    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    std::string csv = "mode,proxy,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,"
+                      "traversal_steps_per_pixel,primitive_tests_per_pixel,mse,efficiency,efficiency_over_exact\n";
     std::string convergence = "mode,seconds_budget,seconds,samples_per_pixel,mse\n";
     std::vector<PlotSeries> curves;
-    for (const Mode& mode : modes(*o)) {
+    double exact_efficiency = 0, error_white = 0;
+    for (std::size_t m = 0; m < all_modes.size(); ++m) {
+      const Mode& mode = all_modes[m];
+      use_world(mode.proxy);
       PlotSeries curve{mode.name, {}, {}};
       for (int point = o->convergence_points - 1; point >= 0; --point) {
         RenderOptions options = mode.options;
         options.seconds = o->seconds / std::pow(2.0, point);
-        if (terminal) std::cerr << "visproxy compare: " << mode.name << ", " << options.seconds << " s\n";
-        const RenderResult result = render(scene, world, options);
+        const std::string label = "mode " + std::to_string(m + 1) + "/" + std::to_string(all_modes.size()) + " " + mode.name + ", " +
+                                  format_number(options.seconds) + " s";
+        if (terminal) options.on_pass = [&](int passes, double seconds) { draw_progress(label, seconds / options.seconds, passes, seconds); };
+        else if (point == 0) std::cerr << "visproxy compare: " << mode.name << "\n";
+        const RenderResult result = render(scene, *world, options);
+        if (terminal) std::fprintf(stderr, "\n");
         const double mse = mean_squared_error(result.image, reference);
-        char line[256];
+        char line[512];
         std::snprintf(line, sizeof line, "%s,%.6g,%.6g,%d,%.10g\n", mode.name.c_str(), options.seconds, result.stats.seconds,
                       result.stats.passes, mse);
         convergence += line;
         curve.x.push_back(result.stats.seconds);
         curve.y.push_back(mse);
         if (point != 0) continue;
+        const RenderStats& s = result.stats;
+        if (m == 0) error_white = 4 * std::sqrt(mse);  // error maps: white at 4x exact's RMS error
         write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
         write_png(folder / (file_stem(mode.name) + ".png"), result.image);
-        const RenderStats& s = result.stats;
+        write_error_png(folder / (file_stem(mode.name) + ".error.png"), result.image, reference, error_white);
         const double efficiency = mse > 0 ? 1.0 / (mse * s.seconds) : 0.0;
-        // The same samples again through the counting traversal: deterministic work figures.
+        if (m == 0) exact_efficiency = efficiency;
+        // The first passes again through the counting traversal: deterministic work figures,
+        // scaled to the passes reached (every pass draws the same distribution of samples).
         double steps = std::nan(""), primitives = std::nan("");
         if (counting) {
           RenderOptions counted = mode.options;
-          counted.spp = s.passes;
+          // Learned probabilities change from pass to pass: those modes are counted in full.
+          const bool stationary = mode.options.probabilities != ProbabilityMode::learned && mode.options.probe_passes == 0;
+          counted.spp = stationary ? std::min(s.passes, o->count_passes) : s.passes;
           counted.seconds = 0;
-          if (terminal) std::cerr << "visproxy compare: " << mode.name << ", counting " << s.passes << " spp\n";
+          const std::string count_label = "mode " + std::to_string(m + 1) + "/" + std::to_string(all_modes.size()) + " " + mode.name +
+                                          ", counting " + std::to_string(counted.spp) + " spp";
+          if (terminal) counted.on_pass = [&](int passes, double seconds) { draw_progress(count_label, double(passes) / counted.spp, passes, seconds); };
           const RenderResult c = render(scene, *counting, counted);
-          steps = static_cast<double>(c.stats.traversal_steps) / pixels;
-          primitives = static_cast<double>(c.stats.primitive_tests) / pixels;
+          if (terminal) std::fprintf(stderr, "\n");
+          const double scale = static_cast<double>(s.passes) / counted.spp / pixels;
+          steps = static_cast<double>(c.stats.traversal_steps) * scale;
+          primitives = static_cast<double>(c.stats.primitive_tests) * scale;
         }
-        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.4g | %.4g |\n", mode.name.c_str(),
-                      s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, static_cast<double>(s.exact_tests) / pixels,
-                      static_cast<double>(s.proxy_tests) / pixels, steps, primitives, mse, efficiency);
+        const double relative = exact_efficiency > 0 ? efficiency / exact_efficiency : std::nan("");
+        // Probe rays trace both the mesh and the proxy.
+        const double exact_tests = static_cast<double>(s.exact_tests + s.probe_rays) / pixels;
+        const double proxy_tests = static_cast<double>(s.proxy_tests + s.probe_rays) / pixels;
+        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.4g | %.4g | %.2f |\n", mode.name.c_str(),
+                      s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests, steps, primitives, mse,
+                      efficiency, relative);
         md += line;
-        std::snprintf(line, sizeof line, "%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g\n", mode.name.c_str(), s.seconds, s.passes,
-                      static_cast<double>(s.shadow_rays) / pixels, static_cast<double>(s.exact_tests) / pixels,
-                      static_cast<double>(s.proxy_tests) / pixels, steps, primitives, mse, efficiency);
+        std::snprintf(line, sizeof line, "\"%s\",%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g,%.6g\n", mode.name.c_str(),
+                      mode.proxy.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests,
+                      steps, primitives, mse, efficiency, relative);
         csv += line;
       }
       curves.push_back(std::move(curve));
     }
     md += "\nMSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance). "
-          "Exact and proxy tests: segment queries against meshes and against proxies; traversal steps and primitive tests: "
-          "BVH nodes visited and triangles or balls tested by those queries, counted by re-rendering the same samples "
-          "with visproxy's own traversal (nan with --no-count). Images: MODE.pfm / MODE.png; "
-          "MSE against time: convergence.csv, convergence.svg.\n";
+          "Exact and proxy tests: segment queries against meshes and against proxies (adaptive modes include their probe "
+          "rays). Traversal steps and primitive tests: BVH nodes visited and triangles or balls tested by the shadow "
+          "queries, counted by re-rendering the first " + std::to_string(o->count_passes) +
+          " passes with visproxy's own traversal and scaled to the passes reached (learned modes: every pass; nan with "
+          "--no-count). eq8: the "
+          "paper's estimator (a term drawn with p1, p2, p3); control variate: the proxy's answer corrected by the mesh "
+          "under Russian roulette (learned: its probabilities from the corrections each pixel traced before). Images: MODE.pfm / MODE.png; "
+          "error maps MODE.error.png, per-pixel RMS error over the channels, white at " + format_number(error_white) +
+          " (4x the exact mode's RMS error); MSE against time: convergence.csv, convergence.svg.\n";
     write_file_atomically(folder / "table.md", md);
     write_file_atomically(folder / "table.csv", csv);
     write_file_atomically(folder / "convergence.csv", convergence);
