@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_test_support.h"
+#include "core/errors.h"
 #include "core/files.h"
 #include "render/image.h"
 #include "test_support.h"
@@ -27,6 +28,7 @@ class CliRender : public testing::ScratchFolder {
                                  "' --cache '" + (folder_ / "cache").string() + "' " + options);
   }
   Image image(const std::string& name) const { return read_pfm(folder_ / (name + ".pfm")); }
+  const std::filesystem::path& folder() const { return folder_; }
 };
 
 std::filesystem::path cornell() { return std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/scenes/cornell.json"; }
@@ -40,12 +42,27 @@ void expect_bounds_identical_and_finite(CliRender& test, const std::filesystem::
                                     "--visibility stochastic --probabilities adaptive --cost-heuristic --probability-floor 0 "
                                     "--probe-rays 4 --spp 2 --maps " + size);
   ASSERT_EQ(adaptive.exit_code, 0) << adaptive.err;
+  // The control variate with degenerate probabilities: no floor, corrections almost never traced.
+  const auto learned = test.render(scene, "learned",
+                                   "--visibility stochastic --estimator control-variate --probabilities learned "
+                                   "--probability-floor 0 --correction-scale 0.01 --spp 3 --maps " + size);
+  ASSERT_EQ(learned.exit_code, 0) << learned.err;
+  const auto probed = test.render(scene, "probed",
+                                  "--visibility stochastic --estimator control-variate --probabilities adaptive --probe-passes 1 "
+                                  "--probe-rays 2 --spp 2 " + size);
+  ASSERT_EQ(probed.exit_code, 0) << probed.err;
+  for (const char* name : {"exact", "bounds", "stochastic", "adaptive", "learned", "probed"})
+    testing::expect_described(json::parse(read_file(test.folder() / (std::string(name) + ".stats.json"))), "render-stats.schema.json");
   const Image exact = test.image("exact");
   EXPECT_EQ(exact.pixels, test.image("bounds").pixels);  // bit-identical
   double brightest = 0;
   for (const Color& c : exact.pixels) brightest = std::max(brightest, c.maxCoeff());
   EXPECT_GT(brightest, 0.0);
-  for (const char* name : {"exact", "stochastic", "adaptive"}) EXPECT_TRUE(all_finite(test.image(name))) << name;
+  for (const char* name : {"exact", "stochastic", "adaptive", "learned", "probed"}) EXPECT_TRUE(all_finite(test.image(name))) << name;
+}
+
+TEST_F(CliRender, ShippedSceneIsDescribedByTheSchema) {
+  testing::expect_described(json::parse(read_file(cornell())), "scene.schema.json");
 }
 
 TEST_F(CliRender, CornellBoxBoundsMatchesExactAndEveryModeIsFinite) {
@@ -67,7 +84,65 @@ TEST_F(CliRender, GeneratedHairballBoundsMatchesExact) {
   const auto generated = testing::run_visproxy("generate hairball --triangles 20000 -o '" + (folder_ / "hairball").string() + "'");
   ASSERT_EQ(generated.exit_code, 0) << generated.err;
   EXPECT_TRUE(std::filesystem::exists(folder_ / "hairball" / "proxies" / "manifest.json"));
+  testing::expect_described(json::parse(read_file(folder_ / "hairball" / "hairball.json")), "scene.schema.json");
   expect_bounds_identical_and_finite(*this, folder_ / "hairball" / "hairball.json", "--width 40 --height 30");
+}
+
+// OpenEXR output holds the same linear image as the PFM (both store 32-bit floats).
+TEST_F(CliRender, ExrOutputHoldsTheSameLinearImage) {
+  const std::string options = "--spp 2 --seed 4 --width 12 --height 10";
+  ASSERT_EQ(render(cornell(), "as-pfm", options).exit_code, 0);
+  const auto exr = testing::run_visproxy("render '" + cornell().string() + "' -o '" + (folder_ / "as-exr.exr").string() + "' --cache '" +
+                                         (folder_ / "cache").string() + "' " + options);
+  ASSERT_EQ(exr.exit_code, 0) << exr.err;
+  EXPECT_TRUE(std::filesystem::exists(folder_ / "as-exr.png"));
+  const Image from_exr = read_exr(folder_ / "as-exr.exr");
+  EXPECT_EQ(from_exr.width, 12);
+  EXPECT_EQ(from_exr.height, 10);
+  EXPECT_EQ(from_exr.pixels, image("as-pfm").pixels);
+  // Not an image: one line naming the file.
+  std::ofstream(folder_ / "bad.exr") << "not an image";
+  EXPECT_THROW(read_exr(folder_ / "bad.exr"), InvalidInputError);
+  const auto tiff = testing::run_visproxy("render '" + cornell().string() + "' -o '" + (folder_ / "out.tiff").string() + "' --spp 1");
+  EXPECT_EQ(tiff.exit_code, 2);
+  EXPECT_NE(tiff.err.find("out.tiff"), std::string::npos) << tiff.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "out.tiff"));
+}
+
+TEST_F(CliRender, LearnedProbabilitiesNeedTheControlVariate) {
+  const auto result = render(cornell(), "learned", "--visibility stochastic --probabilities learned --spp 1");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find("control-variate"), std::string::npos) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "learned.pfm"));
+}
+
+// `visproxy compare` on a small hairball: every mode in the table, its images and error
+// maps, the convergence curve, and an efficiency ratio of 1 for exact.
+TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
+  const auto generated = testing::run_visproxy("generate hairball --triangles 4800 -o '" + (folder_ / "hairball").string() + "'");
+  ASSERT_EQ(generated.exit_code, 0) << generated.err;
+  const std::filesystem::path out = folder_ / "compare";
+  const auto result = testing::run_visproxy("compare '" + (folder_ / "hairball" / "hairball.json").string() + "' -o '" + out.string() +
+                                            "' --seconds 0.05 --reference-spp 8 --convergence-points 2 --count-passes 1 "
+                                            "--width 16 --height 12 --proxy hull:32 --cache '" + (folder_ / "cache").string() + "'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string table = read_file(out / "table.md");
+  for (const char* mode : {"| exact |", "| bounds |", "| hull:32 eq8 equal |", "| hull:32 eq8 adaptive |",
+                           "| hull:32 eq8 adaptive + cost heuristic |", "| hull:32 control variate equal |",
+                           "| hull:32 control variate learned |"})
+    EXPECT_NE(table.find(mode), std::string::npos) << mode << "\n" << table;
+  const std::string csv = read_file(out / "table.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 8);  // header + 7 modes
+  EXPECT_NE(csv.find("\"exact\",,"), std::string::npos) << csv;
+  for (const char* file : {"reference.pfm", "exact.pfm", "exact.png", "exact.error.png", "bounds.error.png",
+                           "hull-32-control-variate-learned.error.png", "convergence.csv", "convergence.svg"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  const std::string convergence = read_file(out / "convergence.csv");
+  EXPECT_EQ(std::count(convergence.begin(), convergence.end(), '\n'), 1 + 7 * 2);
+  // The exact row's efficiency ratio is 1 by definition.
+  const std::size_t exact_row = csv.find("\"exact\"");
+  const std::string row = csv.substr(exact_row, csv.find('\n', exact_row) - exact_row);
+  EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
 }
 
 TEST_F(CliRender, BadScenesGetOneLineNamingTheFile) {
