@@ -22,7 +22,7 @@ struct GenerateOptions {
   std::size_t triangles = 2'000'000;
   std::filesystem::path folder;
   std::uint64_t seed = 1;
-  std::vector<std::string> proxies{"hull", "cluster:0.02"};
+  std::vector<std::string> proxies{"hull:32", "hull", "cluster:0.02"};
   int width = 320, height = 240;
 };
 
@@ -66,7 +66,7 @@ void add_generate_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(std::size_t{480}, std::size_t{200'000'000}));
   hairball->add_option("-o,--output", o->folder, "Output folder (created if missing)")->required();
   hairball->add_option("--seed", o->seed, "Seed of the tubes and of the proxy builds [default: 1]");
-  hairball->add_option("--proxy", o->proxies, "Proxies to build and name in the scene [default: hull cluster:0.02]");
+  hairball->add_option("--proxy", o->proxies, "Proxies to build and name in the scene [default: hull:32 hull cluster:0.02]");
   hairball->add_option("--width", o->width, "Image width of the scene's camera [default: 320]")->check(CLI::Range(1, 16384));
   hairball->add_option("--height", o->height, "Image height [default: 240]")->check(CLI::Range(1, 16384));
   hairball->callback([o, &exit_code] {
