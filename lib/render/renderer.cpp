@@ -5,6 +5,7 @@
 #include "render/renderer.h"
 
 #include "core/errors.h"
+#include "trace/embree_support.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -165,13 +166,6 @@ class LightShaft {
 
   std::vector<Vertex> points_;
 };
-
-bool segment_meets_sphere(const Vertex& from, const Vertex& to, const Sphere& sphere) {
-  const Vertex d = to - from;
-  const double length2 = d.squaredNorm();
-  const double t = length2 > 0 ? std::clamp((sphere.center - from).dot(d) / length2, 0.0, 1.0) : 0.0;
-  return (from + t * d - sphere.center).squaredNorm() <= sphere.radius * sphere.radius;
-}
 
 double scene_scale(const Scene& scene) {
   BoundingBox box;
@@ -475,7 +469,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           // Only the instances in the shaft whose bounding sphere this segment meets can block it.
           unsigned bits = 0;
           for (const std::size_t i : shaft_instances)
-            if (segment_meets_sphere(x, y.position, world.instance_sphere(i))) bits |= instance_bit(i);
+            if (segment_meets_ball(world.instance_sphere(i), x, y.position - x, 0.0, 1.0)) bits |= instance_bit(i);
           const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
           bool rest_free = bits == 0;
           if (!rest_free && !traced_before) {

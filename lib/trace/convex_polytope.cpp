@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "mesh/mesh_topology.h"
+#include "trace/embree_support.h"
 
 namespace visproxy {
 
@@ -74,9 +75,7 @@ ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) con
 
 bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
   const Vertex d = to - from;
-  const double length2 = d.squaredNorm();
-  const double closest = length2 > 0 ? std::clamp((center_ - from).dot(d) / length2, 0.0, 1.0) : 0.0;
-  if ((from + closest * d - center_).squaredNorm() > radius_ * radius_) return false;
+  if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return false;
   double enter = 0, leave = 1;
   for (const Plane& plane : planes_) {
     const double along = plane.normal.dot(d);
