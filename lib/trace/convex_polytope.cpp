@@ -73,15 +73,15 @@ ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) con
   return result;
 }
 
-bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
+std::optional<std::array<double, 2>> ConvexPolytope::clip_segment(const Vertex& from, const Vertex& to) const {
   const Vertex d = to - from;
-  if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return false;
+  if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return std::nullopt;
   double enter = 0, leave = 1;
   for (const Plane& plane : planes_) {
     const double along = plane.normal.dot(d);
     const double inside = plane.offset - plane.normal.dot(from);  // >= 0: `from` behind the plane
     if (along == 0) {
-      if (inside < 0) return false;
+      if (inside < 0) return std::nullopt;
       continue;
     }
     const double t = inside / along;
@@ -89,9 +89,9 @@ bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
       leave = std::min(leave, t);
     else
       enter = std::max(enter, t);
-    if (enter > leave) return false;
+    if (enter > leave) return std::nullopt;
   }
-  return true;
+  return std::array<double, 2>{enter, leave};
 }
 
 bool ConvexPolytope::separated_from(std::span<const Vertex> points) const {
