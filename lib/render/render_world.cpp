@@ -197,13 +197,12 @@ struct RenderWorld::Impl {
     return mask;
   }
 
-  bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter, double enter = 0,
-               double leave = 1) const {
+  bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
     if (const auto it = convex.find(scene); it != convex.end())
       for (const ConvexInstance& instance : it->second) {
         if (!filter_passes(instance.id, filter)) continue;
         if (counting) ++g_thread_counts.nodes, ++g_thread_counts.primitives;  // one solid, clipped
-        if (instance.world.meets_segment(from + enter * (to - from), from + leave * (to - from))) return true;
+        if (instance.world.meets_segment(from, to)) return true;
       }
     // No Embree call when every instance Embree holds here is filtered out (e.g. the only
     // instance without a convex proxy is the one the query skips).
@@ -217,9 +216,8 @@ struct RenderWorld::Impl {
         const auto& instance = it->second[i];
         if (!instance || !filter_passes(i, filter)) continue;
         ++counts.nodes;
-        const Vertex a = from + enter * (to - from), b = from + leave * (to - from);
-        if (instance->world.empty() || !segment_meets_box(a, b, instance->world)) continue;
-        if (instance->object->segment_blocked(instance->to_object * a, instance->to_object * b, counts)) return true;
+        if (instance->world.empty() || !segment_meets_box(from, to, instance->world)) continue;
+        if (instance->object->segment_blocked(instance->to_object * from, instance->to_object * to, counts)) return true;
       }
       return false;
     }
@@ -227,8 +225,6 @@ struct RenderWorld::Impl {
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
     RTCRay ray = segment_ray(from, to);
-    ray.tnear = static_cast<float>(enter);
-    ray.tfar = static_cast<float>(leave);
     ray.mask = query_mask(filter);
     const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
     context.context.filter = shared_bit ? instance_filter : nullptr;
@@ -355,9 +351,6 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
 
 bool RenderWorld::mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->camera, from, to, filter);
-}
-bool RenderWorld::mesh_blocks_within(const Vertex& from, const Vertex& to, double enter, double leave, InstanceFilter filter) const {
-  return impl_->blocked(impl_->camera, from, to, filter, enter, leave);
 }
 bool RenderWorld::proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->proxy, from, to, filter);

@@ -78,10 +78,6 @@ class RenderWorld {
   /// Whether the open segment is blocked by the exact geometry of the instances the filter
   /// lets through (lights never block).
   bool mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
-  /// The same for the part enter <= t <= leave of from + t (to - from). Embree sees the
-  /// whole segment's origin and direction with a shorter t range, so a triangle is met or
-  /// missed exactly as in the whole segment's query (within the range).
-  bool mesh_blocks_within(const Vertex& from, const Vertex& to, double enter, double leave, InstanceFilter filter = {}) const;
   /// The same against each instance's stochastic proxy (its mesh where it has none).
   bool proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
   /// The same against the instances' outside (inside) proxies; instances without one are

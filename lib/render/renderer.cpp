@@ -497,27 +497,6 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           traced_before = true;
           ++stats.bounds_traced;
           ++stats.exact_tests;
-          // When the own instance cannot block, only the instances in `bits` can, and those
-          // with a convex outside proxy only inside it: their meshes are traced over that
-          // stretch of the segment alone (padded far beyond float rounding).
-          if (hit->own_mesh_behind) {
-            double enter = 1, leave = 0;
-            bool convex = true;
-            for (const std::size_t i : shaft_instances) {
-              if ((bits & instance_bit(i)) == 0) continue;
-              const ConvexPolytope* polytope = world.outside_polytope(i);
-              if (!polytope) {
-                convex = false;
-                break;
-              }
-              if (const auto part = polytope->clip_segment(x, y.position)) enter = std::min(enter, (*part)[0]), leave = std::max(leave, (*part)[1]);
-            }
-            if (convex) {
-              const double pad = 10 * offset / distance;
-              visibility = enter <= leave && world.mesh_blocks_within(x, y.position, std::max(0.0, enter - pad), std::min(1.0, leave + pad), rest) ? 0 : 1;
-              break;
-            }
-          }
           visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
           break;
         }

@@ -73,15 +73,15 @@ ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) con
   return result;
 }
 
-std::optional<std::array<double, 2>> ConvexPolytope::clip_segment(const Vertex& from, const Vertex& to) const {
+bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
   const Vertex d = to - from;
-  if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return std::nullopt;
+  if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return false;
   double enter = 0, leave = 1;
   for (const Plane& plane : planes_) {
     const double along = plane.normal.dot(d);
     const double inside = plane.offset - plane.normal.dot(from);  // >= 0: `from` behind the plane
     if (along == 0) {
-      if (inside < 0) return std::nullopt;
+      if (inside < 0) return false;
       continue;
     }
     const double t = inside / along;
@@ -89,9 +89,9 @@ std::optional<std::array<double, 2>> ConvexPolytope::clip_segment(const Vertex& 
       leave = std::min(leave, t);
     else
       enter = std::max(enter, t);
-    if (enter > leave) return std::nullopt;
+    if (enter > leave) return false;
   }
-  return std::array<double, 2>{enter, leave};
+  return true;
 }
 
 bool ConvexPolytope::separated_from(std::span<const Vertex> points) const {

@@ -4,7 +4,6 @@
 // cheaper than a BVH query for boxes and bounded hulls of a few dozen faces.
 
 #include <Eigen/Geometry>
-#include <array>
 #include <optional>
 #include <span>
 #include <vector>
@@ -34,10 +33,7 @@ class ConvexPolytope {
   ConvexPolytope transformed(const Eigen::Affine3d& transform) const;
 
   /// Whether the closed segment from `from` to `to` meets the solid.
-  bool meets_segment(const Vertex& from, const Vertex& to) const { return clip_segment(from, to).has_value(); }
-  /// The parameters [enter, leave] within [0, 1] of the part of the segment
-  /// from + t (to - from) inside the solid, or nullopt when it misses.
-  std::optional<std::array<double, 2>> clip_segment(const Vertex& from, const Vertex& to) const;
+  bool meets_segment(const Vertex& from, const Vertex& to) const;
 
   /// True when one face plane has every point strictly in front of it: the convex hull of
   /// the points (a light shaft, say) then misses the solid. False proves nothing.

@@ -183,11 +183,6 @@ TEST(StochasticVisibility, ProxiesAndMeshesAnswerAsDesigned) {
   EXPECT_FALSE(world.mesh_blocks(kSegments[0].from, kSegments[0].to, {.skip = 1, .only = -1}));
   EXPECT_FALSE(world.mesh_blocks(kSegments[0].from, kSegments[0].to, {.skip = -1, .only = 0}));
   EXPECT_TRUE(world.mesh_blocks(kSegments[0].from, kSegments[0].to, {.skip = 0, .only = -1}));
-  // Part of a segment: the ball (z in [1, 3]) lies in t in [0.2, 0.6] of segment 0.
-  EXPECT_TRUE(world.mesh_blocks_within(kSegments[0].from, kSegments[0].to, 0.0, 1.0));
-  EXPECT_TRUE(world.mesh_blocks_within(kSegments[0].from, kSegments[0].to, 0.15, 0.65));
-  EXPECT_FALSE(world.mesh_blocks_within(kSegments[0].from, kSegments[0].to, 0.65, 1.0));
-  EXPECT_FALSE(world.mesh_blocks_within(kSegments[0].from, kSegments[0].to, 0.0, 0.15));
   EXPECT_EQ(world.stochastic_kind(0), ProxyKind::outside);
 
   InstanceProxy inside{ProxyKind::inside, "inside:1", {}, {{{0, 0, 2}, 0.9}}};

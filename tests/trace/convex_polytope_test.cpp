@@ -72,21 +72,6 @@ TEST(ConvexPolytope, TransformedSolidMatchesTheSlabTestInItsOwnFrame) {
   EXPECT_LT(met, 18000);
 }
 
-TEST(ConvexPolytope, ClipGivesTheStretchInsideTheSolid) {
-  const ConvexPolytope cube = *ConvexPolytope::from_mesh(unit_cube());
-  // Along x through the middle, from -1 to 3: inside for x in [0, 1], t in [1/4, 1/2].
-  const auto part = cube.clip_segment({-1, 0.5, 0.5}, {3, 0.5, 0.5});
-  ASSERT_TRUE(part.has_value());
-  EXPECT_NEAR((*part)[0], 0.25, 1e-8);
-  EXPECT_NEAR((*part)[1], 0.5, 1e-8);
-  // Starting inside: from t = 0.
-  const auto inner = cube.clip_segment({0.5, 0.5, 0.5}, {0.5, 0.5, 2});
-  ASSERT_TRUE(inner.has_value());
-  EXPECT_EQ((*inner)[0], 0.0);
-  EXPECT_NEAR((*inner)[1], 1.0 / 3, 1e-8);
-  EXPECT_FALSE(cube.clip_segment({-1, 2, 0.5}, {3, 2, 0.5}).has_value());
-}
-
 TEST(ConvexPolytope, SeparationProvesOnlyWhatHolds) {
   const ConvexPolytope cube = *ConvexPolytope::from_mesh(unit_cube());
   const std::vector<Vertex> beside = {{2, 0, 0}, {3, 1, 1}, {2.5, 0.5, 2}};  // all beyond x = 1
