@@ -121,7 +121,6 @@ struct RenderWorld::Impl {
   std::vector<const TriangleMesh*> instance_meshes;
   std::map<std::string, TangentSides> mesh_sides;
   std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
-  std::vector<const ConvexPolytope*> outside_polytopes;  // per instance, into `convex`, or nullptr
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
 
   ~Impl() {
@@ -304,9 +303,6 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const unsigned id = attach_triangles(w.device, w.camera, lights, kLightMask);
     if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
   }
-  w.outside_polytopes.assign(scene.instances.size(), nullptr);
-  if (const auto it = w.convex.find(w.outside); it != w.convex.end())
-    for (const ConvexInstance& c : it->second) w.outside_polytopes[c.id] = &c.world;
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
   w.device.throw_if_failed();
 }
@@ -377,7 +373,7 @@ unsigned instance_bit(std::size_t instance) { return instance_mask(instance); }
 const BoundingBox& RenderWorld::instance_bounds(std::size_t instance) const { return impl_->instance_bounds[instance]; }
 const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return impl_->instance_spheres[instance]; }
 
-const ConvexPolytope* RenderWorld::outside_polytope(std::size_t instance) const { return impl_->outside_polytopes[instance]; }
+
 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }

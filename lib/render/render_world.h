@@ -10,7 +10,6 @@
 #include "core/proxy_kind.h"
 #include "mesh/sphere_set.h"
 #include "scene/scene.h"
-#include "trace/convex_polytope.h"
 #include "trace/counting_bvh.h"
 
 namespace visproxy {
@@ -92,10 +91,6 @@ class RenderWorld {
   /// holds every vertex (tighter than the box's for round meshes).
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
-
-  /// The instance's outside proxy as a convex solid in world space when it is one that
-  /// queries clip against (boxes, bounded hulls), else nullptr.
-  const ConvexPolytope* outside_polytope(std::size_t instance) const;
 
   /// Whether any instance has an inside proxy (else inside_blocks is always false).
   bool has_inside_proxies() const;

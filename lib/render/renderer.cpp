@@ -100,9 +100,8 @@ class LightSampler {
 
 // The shaft from a point to every light: the convex hull of the point and the lights'
 // corners. meets() is conservative: false only when an instance is provably outside the
-// shaft: its box separated along a coordinate axis, its bounding sphere outside the
-// circular cone around the shaft, or a face plane of its convex outside proxy with the
-// whole shaft in front.
+// shaft: its box separated along a coordinate axis, or its bounding sphere outside the
+// circular cone around the shaft.
 class LightShaft {
  public:
   explicit LightShaft(const Scene& scene) {
@@ -128,11 +127,10 @@ class LightShaft {
     shaft.has_cone = false;
   }
 
-  static bool meets(From& shaft, const BoundingBox& box, const Sphere& sphere, const ConvexPolytope* polytope) {
+  static bool meets(From& shaft, const BoundingBox& box, const Sphere& sphere) {
     if (box.empty()) return false;
     // Separating coordinate axes: the shaft's extent is that of its points.
     if ((shaft.hi.array() < box.min.array()).any() || (shaft.lo.array() > box.max.array()).any()) return false;
-    if (polytope && polytope->separated_from(shaft.points)) return false;
     // The cone from the apex around the corners against the instance's bounding sphere.
     if (!shaft.has_cone) cone(shaft);
     if (shaft.cos_half <= 0) return true;  // wider than a half-space: no cone test
@@ -417,7 +415,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       shaft.from(x, shaft_from);
       for (std::size_t i = 0; i < scene.instances.size(); ++i)
         if (static_cast<int>(i) != own &&
-            LightShaft::meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i), world.outside_polytope(i)))
+            LightShaft::meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i)))
           shaft_instances.push_back(i);
       if (shaft_instances.empty()) ++stats.shafts_culled;
       // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.

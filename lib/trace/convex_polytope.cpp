@@ -94,12 +94,4 @@ bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
   return true;
 }
 
-bool ConvexPolytope::separated_from(std::span<const Vertex> points) const {
-  if (points.empty()) return true;
-  return std::any_of(planes_.begin(), planes_.end(), [&](const Plane& plane) {
-    return std::all_of(points.begin(), points.end(),
-                       [&](const Vertex& p) { return plane.normal.dot(p) > plane.offset; });
-  });
-}
-
 }  // namespace visproxy

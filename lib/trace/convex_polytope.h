@@ -5,7 +5,6 @@
 
 #include <Eigen/Geometry>
 #include <optional>
-#include <span>
 #include <vector>
 
 #include "mesh/triangle_mesh.h"
@@ -34,10 +33,6 @@ class ConvexPolytope {
 
   /// Whether the closed segment from `from` to `to` meets the solid.
   bool meets_segment(const Vertex& from, const Vertex& to) const;
-
-  /// True when one face plane has every point strictly in front of it: the convex hull of
-  /// the points (a light shaft, say) then misses the solid. False proves nothing.
-  bool separated_from(std::span<const Vertex> points) const;
 
   const std::vector<Plane>& planes() const { return planes_; }
 

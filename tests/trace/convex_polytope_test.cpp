@@ -72,13 +72,5 @@ TEST(ConvexPolytope, TransformedSolidMatchesTheSlabTestInItsOwnFrame) {
   EXPECT_LT(met, 18000);
 }
 
-TEST(ConvexPolytope, SeparationProvesOnlyWhatHolds) {
-  const ConvexPolytope cube = *ConvexPolytope::from_mesh(unit_cube());
-  const std::vector<Vertex> beside = {{2, 0, 0}, {3, 1, 1}, {2.5, 0.5, 2}};  // all beyond x = 1
-  EXPECT_TRUE(cube.separated_from(beside));
-  const std::vector<Vertex> around = {{-1, 0.5, 0.5}, {2, 0.5, 0.5}};  // their hull crosses the cube
-  EXPECT_FALSE(cube.separated_from(around));
-}
-
 }  // namespace
 }  // namespace visproxy
