@@ -56,6 +56,7 @@ std::optional<ConvexPolytope> ConvexPolytope::from_mesh(const TriangleMesh& mesh
   polytope.center_ = 0.5 * (box.min + box.max);
   for (const Vertex& v : points) polytope.radius_ = std::max(polytope.radius_, (v - polytope.center_).norm());
   polytope.radius_ += 1e3 * tolerance;
+  polytope.pack();
   return polytope;
 }
 
@@ -70,26 +71,41 @@ ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) con
     const double length = n.norm();
     result.planes_.push_back({n / length, (plane.offset + n.dot(transform.translation())) / length});
   }
+  result.pack();
   return result;
+}
+
+void ConvexPolytope::pack() {
+  const std::size_t blocks = (planes_.size() + 3) / 4;
+  packed_.assign(16 * blocks, 0.0);
+  for (std::size_t i = 0; i < 4 * blocks; ++i) {
+    double* block = packed_.data() + 16 * (i / 4);
+    const std::size_t k = i % 4;
+    if (i < planes_.size()) {
+      for (int a = 0; a < 3; ++a) block[4 * a + k] = planes_[i].normal[a];
+      block[12 + k] = planes_[i].offset;
+    } else {
+      block[12 + k] = 1;  // 0 . x <= 1 everywhere
+    }
+  }
 }
 
 bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
   const Vertex d = to - from;
   if (!segment_meets_ball({center_, radius_}, from, d, 0.0, 1.0)) return false;
   double enter = 0, leave = 1;
-  for (const Plane& plane : planes_) {
-    const double along = plane.normal.dot(d);
-    const double inside = plane.offset - plane.normal.dot(from);  // >= 0: `from` behind the plane
-    if (along == 0) {
-      if (inside < 0) return false;
-      continue;
+  bool parallel_outside = false;
+  for (std::size_t block = 0; block < packed_.size(); block += 16) {
+    const double* p = packed_.data() + block;
+    for (int k = 0; k < 4; ++k) {
+      const double along = p[k] * d.x() + p[4 + k] * d.y() + p[8 + k] * d.z();
+      const double inside = p[12 + k] - (p[k] * from.x() + p[4 + k] * from.y() + p[8 + k] * from.z());
+      const double t = inside / along;  // used only where along != 0
+      enter = along < 0 ? std::max(enter, t) : enter;
+      leave = along > 0 ? std::min(leave, t) : leave;
+      parallel_outside = parallel_outside || (along == 0 && inside < 0);
     }
-    const double t = inside / along;
-    if (along > 0)
-      leave = std::min(leave, t);
-    else
-      enter = std::max(enter, t);
-    if (enter > leave) return false;
+    if (enter > leave || parallel_outside) return false;
   }
   return true;
 }

@@ -37,7 +37,12 @@ class ConvexPolytope {
   const std::vector<Plane>& planes() const { return planes_; }
 
  private:
+  void pack();  ///< fills packed_ from planes_
+
   std::vector<Plane> planes_;
+  /// The planes in blocks of four, each block nx[4] ny[4] nz[4] offset[4] (padded with
+  /// planes that hold everything), so that the clipping loop runs branch-free four at a time.
+  std::vector<double> packed_;
   Vertex center_ = Vertex::Zero();  ///< a ball holding the solid: segments that miss it are rejected first
   double radius_ = 0;
 };
