@@ -10,6 +10,7 @@
 #include "mesh/sphere_set.h"
 #include "render/renderer.h"
 #include "render/render_test_scenes.h"
+#include "test_support.h"
 #include "trace/ray_scene.h"
 
 namespace visproxy {
@@ -144,14 +145,7 @@ TEST(StochasticVisibility, ConvexProxiesAreClippedAsSolids) {
   t.proxies[1].outside = open_proxy;
   // Against the slab test of the box [-1, 1] x [-1, 1] x [1, 3].
   auto meets_box = [](const Vertex& from, const Vertex& to) {
-    double enter = 0, leave = 1;
-    const Vertex lo(-1, -1, 1), hi(1, 1, 3), d = to - from;
-    for (int a = 0; a < 3; ++a) {
-      double t0 = (lo[a] - from[a]) / d[a], t1 = (hi[a] - from[a]) / d[a];
-      if (t0 > t1) std::swap(t0, t1);
-      enter = std::max(enter, t0), leave = std::min(leave, t1);
-    }
-    return enter <= leave;
+    return testing::segment_meets_box(from, to, Vertex(-1, -1, 1), Vertex(1, 1, 3));
   };
   Random random(99);
   int blocked = 0;

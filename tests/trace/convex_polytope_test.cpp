@@ -6,6 +6,7 @@
 
 #include "core/random.h"
 #include "mesh/sphere_set.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
@@ -46,18 +47,7 @@ TEST(ConvexPolytope, TransformedSolidMatchesTheSlabTestInItsOwnFrame) {
   const ConvexPolytope solid = ConvexPolytope::from_mesh(unit_cube())->transformed(transform);
   const Eigen::Affine3d inverse = transform.inverse();
   auto in_unit_cube = [&](const Vertex& a, const Vertex& b) {
-    const Vertex from = inverse * a, d = inverse * b - from;
-    double enter = 0, leave = 1;
-    for (int k = 0; k < 3; ++k) {
-      if (d[k] == 0) {
-        if (from[k] < 0 || from[k] > 1) return false;
-        continue;
-      }
-      double t0 = -from[k] / d[k], t1 = (1 - from[k]) / d[k];
-      if (t0 > t1) std::swap(t0, t1);
-      enter = std::max(enter, t0), leave = std::min(leave, t1);
-    }
-    return enter <= leave;
+    return testing::segment_meets_box(Vertex(inverse * a), Vertex(inverse * b), Vertex(0, 0, 0), Vertex(1, 1, 1));
   };
   Random random(5);
   int met = 0;
