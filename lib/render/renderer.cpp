@@ -105,36 +105,33 @@ class LightSampler {
 class LightShaft {
  public:
   explicit LightShaft(const Scene& scene) {
-    points_.emplace_back(Vertex::Zero());  // the apex, set by from()
     for (const AreaLight& light : scene.lights)
       for (const auto& t : light.triangles)
         for (const Vertex& corner : t)
-          if (std::find(points_.begin() + 1, points_.end(), corner) == points_.end()) points_.push_back(corner);
+          if (std::find(corners_.begin(), corners_.end(), corner) == corners_.end()) corners_.push_back(corner);
   }
 
   /// The shaft from one apex: its bounds, and its cone once an instance needs it.
   struct From {
-    std::vector<Vertex> points;  ///< apex, then the lights' corners
-    Vertex lo, hi, axis;
+    Vertex apex, lo, hi, axis;
     bool has_cone = false;
     double cos_half = -1, sin_half = 0, reach = 0;
   };
-  void from(const Vertex& apex, From& shaft) const {
-    shaft.points = points_;
-    shaft.points[0] = apex;
-    shaft.lo = shaft.hi = apex;
-    for (const Vertex& c : shaft.points) shaft.lo = shaft.lo.cwiseMin(c), shaft.hi = shaft.hi.cwiseMax(c);
-    shaft.has_cone = false;
+  From from(const Vertex& apex) const {
+    From shaft;
+    shaft.apex = shaft.lo = shaft.hi = apex;
+    for (const Vertex& c : corners_) shaft.lo = shaft.lo.cwiseMin(c), shaft.hi = shaft.hi.cwiseMax(c);
+    return shaft;
   }
 
-  static bool meets(From& shaft, const BoundingBox& box, const Sphere& sphere) {
+  bool meets(From& shaft, const BoundingBox& box, const Sphere& sphere) const {
     if (box.empty()) return false;
     // Separating coordinate axes: the shaft's extent is that of its points.
     if ((shaft.hi.array() < box.min.array()).any() || (shaft.lo.array() > box.max.array()).any()) return false;
     // The cone from the apex around the corners against the instance's bounding sphere.
     if (!shaft.has_cone) cone(shaft);
     if (shaft.cos_half <= 0) return true;  // wider than a half-space: no cone test
-    const Vertex v = sphere.center - shaft.points[0];
+    const Vertex v = sphere.center - shaft.apex;
     const double distance = v.norm();
     if (distance <= sphere.radius) return true;
     if (distance - sphere.radius > shaft.reach) return false;
@@ -146,23 +143,22 @@ class LightShaft {
   }
 
  private:
-  static void cone(From& shaft) {
+  void cone(From& shaft) const {
     shaft.has_cone = true;
-    const Vertex& apex = shaft.points[0];
     shaft.axis = Vertex::Zero();
-    for (std::size_t i = 1; i < shaft.points.size(); ++i) shaft.axis += (shaft.points[i] - apex).normalized();
+    for (const Vertex& c : corners_) shaft.axis += (c - shaft.apex).normalized();
     shaft.cos_half = -1;
     if (shaft.axis.norm() == 0) return;
     shaft.axis.normalize();
     shaft.cos_half = 1, shaft.reach = 0;
-    for (std::size_t i = 1; i < shaft.points.size(); ++i) {
-      shaft.cos_half = std::min(shaft.cos_half, shaft.axis.dot((shaft.points[i] - apex).normalized()));
-      shaft.reach = std::max(shaft.reach, (shaft.points[i] - apex).norm());
+    for (const Vertex& c : corners_) {
+      shaft.cos_half = std::min(shaft.cos_half, shaft.axis.dot((c - shaft.apex).normalized()));
+      shaft.reach = std::max(shaft.reach, (c - shaft.apex).norm());
     }
     shaft.sin_half = std::sqrt(std::max(0.0, 1 - shaft.cos_half * shaft.cos_half));
   }
 
-  std::vector<Vertex> points_;
+  std::vector<Vertex> corners_;
 };
 
 double scene_scale(const Scene& scene) {
@@ -407,15 +403,13 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 
     // bounds: the instances (other than the own) that the shaft from x to the lights meets.
     thread_local std::vector<std::size_t> shaft_instances;
-    thread_local LightShaft::From shaft_from;
     shaft_instances.clear();
     bool traced_before = false;  // a proof failed here: the next segments go straight to the exact query
     bool proof_failed = false, proof_tried = false;
     if (options.visibility == VisibilityMode::bounds) {
-      shaft.from(x, shaft_from);
+      LightShaft::From shaft_from = shaft.from(x);
       for (std::size_t i = 0; i < scene.instances.size(); ++i)
-        if (static_cast<int>(i) != own &&
-            LightShaft::meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i)))
+        if (static_cast<int>(i) != own && shaft.meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i)))
           shaft_instances.push_back(i);
       if (shaft_instances.empty()) ++stats.shafts_culled;
       // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
