@@ -154,12 +154,7 @@ struct RenderWorld::Impl {
     return scene;
   }
 
-  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask,
-                    const std::optional<ConvexPolytope>& polytope = std::nullopt) {
-    if (polytope) {
-      convex[top].push_back({id, polytope->transformed(transform)});
-      return;
-    }
+  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask) {
     embree_masks[top] |= mask;
     if (counting) {
       auto& list = counted[top];
@@ -268,10 +263,17 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const auto id = static_cast<unsigned>(i);
     const unsigned mask = instance_mask(i);
     w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, mask);
-    w.add_instance(w.proxy, scene_for(instance.mesh, p.stochastic), instance.transform, id, mask, polytope_for(instance.mesh, p.stochastic));
-    w.add_instance(w.outside, scene_for(instance.mesh, p.outside), instance.transform, id, mask, polytope_for(instance.mesh, p.outside));
-    if (p.inside)
-      w.add_instance(w.inside, scene_for(instance.mesh, p.inside), instance.transform, id, mask, polytope_for(instance.mesh, p.inside));
+    // A proxy scene holds each instance's proxy clipped as a convex solid, or else traced by
+    // Embree (whose object scene is only built then).
+    auto add_proxy = [&](RTCScene top, const std::optional<InstanceProxy>& proxy) {
+      if (const std::optional<ConvexPolytope>& polytope = polytope_for(instance.mesh, proxy))
+        w.convex[top].push_back({id, polytope->transformed(instance.transform)});
+      else
+        w.add_instance(top, scene_for(instance.mesh, proxy), instance.transform, id, mask);
+    };
+    add_proxy(w.proxy, p.stochastic);
+    add_proxy(w.outside, p.outside);
+    if (p.inside) add_proxy(w.inside, p.inside);
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
     auto sides = w.mesh_sides.find(instance.mesh);
     if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(scene.mesh(instance.mesh).mesh)).first;
