@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "core/random.h"
@@ -37,30 +38,46 @@ TEST(EstimatorVariance, MatchesEquation16InTermsOfHitMissAndVisibility) {
   EXPECT_NEAR(estimator_variance(fractions, p), eq16, 1e-12);
 }
 
-// The variance formula is the second moment of the estimator minus V_avg^2: simulate it.
-TEST(EstimatorVariance, AgreesWithSimulatedEstimator) {
+// Mean and variance of an estimator over 2 000 000 rays of types 1..4 drawn with the
+// fractions {0.3, 0.1, 0.2, 0.4} (V_avg = 0.6): `estimate(v_exact, v_proxy, pick)` with
+// pick uniform in [0, 1).
+struct Moments {
+  double mean = 0, variance = 0;
+};
+constexpr int kSimulatedRays = 2'000'000;
+RayTypeFractions simulated_fractions() {
   RayTypeFractions fractions;
   fractions.f = {0.3, 0.1, 0.2, 0.4};
-  const Probabilities p{0.5, 0.25, 0.25};
-  Random random(11);
-  const int n = 2'000'000;
+  return fractions;
+}
+template <typename Estimate>
+Moments simulate(std::uint64_t seed, Estimate estimate) {
+  Random random(seed);
   double sum = 0, sum_squares = 0;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < kSimulatedRays; ++i) {
     const double u = random.uniform();
     const int type = u < 0.3 ? 1 : u < 0.4 ? 2 : u < 0.6 ? 3 : 4;
     const double v_exact = type >= 3 ? 1 : 0, v_proxy = (type == 2 || type == 4) ? 1 : 0;
-    const double pick = random.uniform();
-    const double estimate = pick < p.p1 ? v_proxy / p.p1
-                            : pick < p.p1 + p.p2 ? (1 - v_proxy) * v_exact / p.p2
-                                                 : -v_proxy * (1 - v_exact) / p.p3;
-    sum += estimate;
-    sum_squares += estimate * estimate;
+    const double value = estimate(v_exact, v_proxy, random.uniform());
+    sum += value;
+    sum_squares += value * value;
   }
-  const double mean = sum / n, variance = sum_squares / n - mean * mean;
-  const double expected = estimator_variance(fractions, p);
+  const double mean = sum / kSimulatedRays;
+  return {mean, sum_squares / kSimulatedRays - mean * mean};
+}
+
+// The variance formula is the second moment of the estimator minus V_avg^2: simulate it.
+TEST(EstimatorVariance, AgreesWithSimulatedEstimator) {
+  const Probabilities p{0.5, 0.25, 0.25};
+  const Moments m = simulate(11, [&](double v_exact, double v_proxy, double pick) {
+    return pick < p.p1 ? v_proxy / p.p1
+           : pick < p.p1 + p.p2 ? (1 - v_proxy) * v_exact / p.p2
+                                : -v_proxy * (1 - v_exact) / p.p3;
+  });
+  const double expected = estimator_variance(simulated_fractions(), p);
   // Mean: unbiased (V_avg = 0.6); standard error sqrt(Var / n) ~ 0.001, so 5 sigma.
-  EXPECT_NEAR(mean, 0.6, 5 * std::sqrt(expected / n));
-  EXPECT_NEAR(variance, expected, 0.01 * expected);
+  EXPECT_NEAR(m.mean, 0.6, 5 * std::sqrt(expected / kSimulatedRays));
+  EXPECT_NEAR(m.variance, expected, 0.01 * expected);
 }
 
 TEST(EstimatorVariance, NeverChosenTermWithRaysIsInfiniteAndUnusedTermIsFree) {
@@ -183,26 +200,15 @@ TEST(CostHeuristic, ShiftsProbabilityToTheProxyWhereProxyAndMeshAgree) {
 // The control variate's variance formula against a simulation of the estimator itself, and
 // its mean against V_avg (unbiased), for probabilities below 1 on both sides.
 TEST(ControlVariate, VarianceFormulaAgreesWithSimulatedEstimator) {
-  RayTypeFractions fractions;
-  fractions.f = {0.3, 0.1, 0.2, 0.4};
   const CorrectionProbabilities q{0.3, 0.6};
-  Random random(12);
-  const int n = 2'000'000;
-  double sum = 0, sum_squares = 0;
-  for (int i = 0; i < n; ++i) {
-    const double u = random.uniform();
-    const int type = u < 0.3 ? 1 : u < 0.4 ? 2 : u < 0.6 ? 3 : 4;
-    const double v = type >= 3 ? 1 : 0, v_proxy = (type == 2 || type == 4) ? 1 : 0;
+  const Moments m = simulate(12, [&](double v_exact, double v_proxy, double pick) {
     const double trace = v_proxy == 1 ? q.after_miss : q.after_hit;
-    const double estimate = random.uniform() < trace ? v_proxy + (v - v_proxy) / trace : v_proxy;
-    sum += estimate;
-    sum_squares += estimate * estimate;
-  }
-  const double mean = sum / n, variance = sum_squares / n - mean * mean;
-  const double expected = control_variate_variance(fractions, q);
+    return pick < trace ? v_proxy + (v_exact - v_proxy) / trace : v_proxy;
+  });
+  const double expected = control_variate_variance(simulated_fractions(), q);
   EXPECT_NEAR(expected, 0.6 * 0.4 + 0.1 * (1 / 0.3 - 1) + 0.2 * (1 / 0.6 - 1), 1e-12);
-  EXPECT_NEAR(mean, 0.6, 5 * std::sqrt(expected / n));  // 5 sigma
-  EXPECT_NEAR(variance, expected, 0.01 * expected);
+  EXPECT_NEAR(m.mean, 0.6, 5 * std::sqrt(expected / kSimulatedRays));  // 5 sigma
+  EXPECT_NEAR(m.variance, expected, 0.01 * expected);
 }
 
 // Eq. 8 draws (a) or (b) before the proxy answers; after a miss both cost the same and (b)
