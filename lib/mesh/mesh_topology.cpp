@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <numeric>
+#include <string>
+
+#include "core/errors.h"
 
 namespace visproxy {
 namespace {
@@ -38,7 +41,42 @@ struct HalfEdge {
 
 }  // namespace
 
+void require_topology_size(std::size_t triangles) {
+  if (triangles > kMaxTopologyTriangles)
+    throw InvalidInputError("", std::to_string(triangles) + " triangles: the mesh topology handles at most " +
+                                    std::to_string(kMaxTopologyTriangles) + " (corners are numbered with 32 bits)");
+}
+
+EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
+  require_topology_size(mesh.triangles.size());
+  // (low << 33 | high << 1 | backward): equal edges sort together, forward uses first.
+  std::vector<std::uint64_t> uses;
+  uses.reserve(3 * mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t a = t[k], b = t[(k + 1) % 3];
+      if (a == b) continue;
+      uses.push_back((std::min(a, b) << 33) | (std::max(a, b) << 1) | (a > b ? 1u : 0u));
+    }
+  std::sort(uses.begin(), uses.end());
+  EdgeBalance balance;
+  for (std::size_t begin = 0; begin < uses.size();) {
+    std::size_t end = begin, backward = 0;
+    for (; end < uses.size() && (uses[end] >> 1) == (uses[begin] >> 1); ++end) backward += uses[end] & 1u;
+    const std::size_t forward = end - begin - backward;
+    if (forward != backward && balance.unbalanced_edges++ == 0) {
+      balance.first_low = static_cast<VertexIndex>(uses[begin] >> 33);
+      balance.first_high = static_cast<VertexIndex>((uses[begin] >> 1) & 0xFFFFFFFFu);
+      balance.first_forward = forward;
+      balance.first_backward = backward;
+    }
+    begin = end;
+  }
+  return balance;
+}
+
 MeshTopology analyze_topology(const TriangleMesh& mesh) {
+  require_topology_size(mesh.triangles.size());
   MeshTopology topology;
   const std::size_t triangle_count = mesh.triangles.size();
 
@@ -101,10 +139,12 @@ MeshTopology analyze_topology(const TriangleMesh& mesh) {
   }
 
   triangle_components(mesh, &topology.components);
+  topology.unbalanced_edges = check_edge_balance(mesh).unbalanced_edges;
   return topology;
 }
 
 std::vector<std::uint32_t> triangle_components(const TriangleMesh& mesh, std::size_t* component_count) {
+  require_topology_size(mesh.triangles.size());
   DisjointSets vertex_sets(mesh.positions.size());
   for (const Triangle& triangle : mesh.triangles) {
     vertex_sets.unite(triangle[0], triangle[1]);

@@ -50,6 +50,7 @@ TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::fi
     case MeshFormat::off: mesh = parsing::parse_off(bytes, source); break;
     case MeshFormat::stl: mesh = parsing::parse_stl(bytes, source); break;
   }
+  require_coordinates_in_range(mesh, source);
   const bool weld = options.weld == Weld::always || (options.weld == Weld::automatic && format == MeshFormat::stl);
   if (weld) return weld_vertices(mesh);
   return mesh;  // moved, not copied

@@ -43,7 +43,8 @@ struct ReadMeshOptions {
 ///   extras (colours) ignored; polygons triangulated as for OBJ.
 /// - STL: ASCII and binary (recognised by size, whatever the header says).
 /// Throws IOError if the file cannot be read and InvalidInputError if its content is
-/// wrong, including a mesh without a single face.
+/// wrong, including a mesh without a single face and coordinates beyond kMaxCoordinate
+/// (1e100).
 TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions& options = {});
 
 /// Parses a mesh held in memory; `source` names it in error messages.

@@ -1,6 +1,27 @@
 #include "mesh/triangle_mesh.h"
 
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "core/errors.h"
+
 namespace visproxy {
+
+std::optional<std::size_t> first_vertex_out_of_range(const TriangleMesh& mesh) {
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    if (!(mesh.positions[i].cwiseAbs().maxCoeff() <= kMaxCoordinate)) return i;  // NaN fails too
+  return std::nullopt;
+}
+
+void require_coordinates_in_range(const TriangleMesh& mesh, const std::filesystem::path& file) {
+  const std::optional<std::size_t> vertex = first_vertex_out_of_range(mesh);
+  if (!vertex) return;
+  char text[64];
+  std::snprintf(text, sizeof text, "%.9g", mesh.positions[*vertex].cwiseAbs().maxCoeff());
+  throw InvalidInputError(file, "vertex " + std::to_string(*vertex) + " has a coordinate of magnitude " + text +
+                                    ", beyond the 1e100 that geometry in double precision can square and cube");
+}
 
 BoundingBox bounding_box(const TriangleMesh& mesh) {
   std::vector<bool> used(mesh.positions.size(), false);
@@ -12,6 +33,29 @@ BoundingBox bounding_box(const TriangleMesh& mesh) {
         box.extend(mesh.positions[index]);
       }
   return box;
+}
+
+double signed_volume(const TriangleMesh& mesh) {
+  const BoundingBox box = bounding_box(mesh);
+  const Vertex centre = box.empty() ? Vertex::Zero() : Vertex(0.5 * (box.min + box.max));
+  double six_volume = 0;
+  for (const Triangle& t : mesh.triangles)
+    six_volume += (mesh.positions[t[0]] - centre).dot((mesh.positions[t[1]] - centre).cross(mesh.positions[t[2]] - centre));
+  return six_volume / 6.0;
+}
+
+std::string content_hash(const TriangleMesh& mesh, std::span<const unsigned char> extra) {
+  std::uint64_t hash = 0xCBF29CE484222325ull;
+  auto mix = [&](const void* data, std::size_t size) {
+    const auto* bytes = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 0x100000001B3ull;
+  };
+  for (const Vertex& p : mesh.positions) mix(p.data(), 3 * sizeof(double));
+  for (const Triangle& t : mesh.triangles) mix(t.data(), sizeof(Triangle));
+  mix(extra.data(), extra.size());
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
 }
 
 std::vector<Vertex> used_positions(const TriangleMesh& mesh) {

@@ -5,8 +5,12 @@
 #include <Eigen/Geometry>
 
 #include <array>
-#include <limits>
 #include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 namespace visproxy {
@@ -39,8 +43,30 @@ struct BoundingBox {
   double diagonal() const { return empty() ? 0.0 : (max - min).norm(); }
 };
 
+/// The largest coordinate magnitude visproxy accepts. Geometry in double precision squares
+/// and cubes coordinate differences (distances, normals, volumes); beyond 1e100 those
+/// would overflow, so such meshes are refused where they are read.
+inline constexpr double kMaxCoordinate = 1e100;
+
+/// The first vertex (lowest index) with a coordinate of magnitude above kMaxCoordinate
+/// or not finite, if any.
+std::optional<std::size_t> first_vertex_out_of_range(const TriangleMesh& mesh);
+
+/// Throws InvalidInputError naming `file` and the first such vertex.
+void require_coordinates_in_range(const TriangleMesh& mesh, const std::filesystem::path& file);
+
 /// Bounding box of the vertices that triangles use (unreferenced vertices are ignored).
 BoundingBox bounding_box(const TriangleMesh& mesh);
+
+/// The signed volume the triangles enclose (divergence theorem, about the box centre to keep
+/// the terms small): the integral of the winding number for a closed mesh, positive when
+/// it is oriented outwards. Units cubed.
+double signed_volume(const TriangleMesh& mesh);
+
+/// 64-bit FNV-1a over the coordinates' and indices' bytes, as 16 hexadecimal digits: the
+/// identity of a mesh's content (cache keys, the files a verify verdict was made on).
+/// `extra` bytes (another object's) may be mixed in after the mesh's.
+std::string content_hash(const TriangleMesh& mesh, std::span<const unsigned char> extra = {});
 
 /// The positions of the vertices that triangles use, in index order (each once).
 std::vector<Vertex> used_positions(const TriangleMesh& mesh);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/errors.h"
+#include "mesh/read_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {
@@ -32,6 +34,43 @@ TEST(MeshTopology, FlippedTriangleMakesThreeInconsistentEdges) {
   TriangleMesh mesh = testing::tetrahedron();
   std::swap(mesh.triangles[3][0], mesh.triangles[3][1]);
   EXPECT_EQ(analyze_topology(mesh).inconsistent_edges, 3u);
+}
+
+TEST(EdgeBalance, ClosedMeshesAreBalancedOpenOrFlippedOnesAreNot) {
+  EXPECT_TRUE(check_edge_balance(testing::unit_cube()).balanced());
+  EXPECT_EQ(analyze_topology(testing::unit_cube()).unbalanced_edges, 0u);
+  TriangleMesh open = testing::tetrahedron();
+  open.triangles.pop_back();  // {1, 2, 3}: edges 1-2, 2-3, 3-1 used once
+  const EdgeBalance balance = check_edge_balance(open);
+  EXPECT_EQ(balance.unbalanced_edges, 3u);
+  EXPECT_EQ(balance.first_low, 1u);
+  EXPECT_EQ(balance.first_high, 2u);
+  EXPECT_EQ(balance.first_forward + balance.first_backward, 1u);
+  TriangleMesh flipped = testing::tetrahedron();
+  std::swap(flipped.triangles[3][0], flipped.triangles[3][1]);
+  EXPECT_EQ(check_edge_balance(flipped).unbalanced_edges, 3u);
+  // Two cubes sharing an edge (non-manifold there) and a triangle with a repeated index
+  // are still closed: every edge is used as often each way.
+  TriangleMesh two = testing::unit_cube();
+  TriangleMesh second = testing::unit_cube();
+  for (Vertex& p : second.positions) p += Vertex(1, 1, 0);
+  append_mesh(two, second);
+  two = weld_vertices(two);
+  EXPECT_GT(analyze_topology(two).non_manifold_edges, 0u);
+  EXPECT_TRUE(check_edge_balance(two).balanced());
+  TriangleMesh repeated = testing::unit_cube();
+  repeated.triangles.push_back({0, 0, 7});
+  EXPECT_TRUE(check_edge_balance(repeated).balanced());
+}
+
+TEST(MeshTopology, MoreTrianglesThanCornerIndicesHoldAreRefused) {
+  EXPECT_NO_THROW(require_topology_size(kMaxTopologyTriangles));
+  try {
+    require_topology_size(kMaxTopologyTriangles + 1);
+    FAIL() << "no error";
+  } catch (const InvalidInputError& error) {
+    EXPECT_NE(std::string(error.what()).find("1431655766 triangles"), std::string::npos) << error.what();
+  }
 }
 
 TEST(MeshTopology, ThreeTrianglesOnOneEdgeAreNonManifold) {

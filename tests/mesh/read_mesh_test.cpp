@@ -233,6 +233,19 @@ TEST(ReadMesh, AcceptsTheSmallestWellFormedFiles) {
       << "underflow reads as zero";
 }
 
+// Finite but absurd: squares and cubes of such coordinates overflow every distance, normal
+// and volume computed in double, so they are refused where they are read, naming the vertex.
+TEST(ReadMesh, CoordinatesBeyondWhatDoublesCanSquareAreRefused) {
+  try {
+    parse("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1.5e300 0\n3 0 1 2\n", MeshFormat::off);
+    FAIL() << "no error";
+  } catch (const InvalidInputError& error) {
+    EXPECT_NE(std::string(error.what()).find("vertex 2 has a coordinate of magnitude 1.5e+300"), std::string::npos)
+        << error.what();
+  }
+  EXPECT_EQ(parse("OFF\n3 1 0\n0 0 0\n1e100 0 0\n0 -1e100 0\n3 0 1 2\n", MeshFormat::off).positions[1].x(), 1e100);
+}
+
 TEST(ReadMesh, UnknownExtensionAndMissingFile) {
   EXPECT_THROW(read_mesh("mesh.3ds"), InvalidInputError);
   EXPECT_THROW(read_mesh("/nonexistent/mesh.off"), IOError);

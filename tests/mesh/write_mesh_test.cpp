@@ -20,7 +20,7 @@ using WriteMesh = testing::ScratchFolder;
 TriangleMesh awkward_mesh() {
   TriangleMesh mesh = testing::tetrahedron();
   mesh.positions[1] = {0.1, 1.0 / 3.0, -std::nextafter(2.0, 3.0)};
-  mesh.positions[2] = {1e-300, -7.5e200, std::ldexp(1.0, -1070)};  // a subnormal too
+  mesh.positions[2] = {1e-300, -7.5e99, std::ldexp(1.0, -1070)};  // a subnormal too
   return mesh;
 }
 
