@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <string>
 
 #include "core/errors.h"
@@ -21,38 +22,49 @@ std::string point_text(const Vertex& p) {
   return buffer;
 }
 
-bool is_convex_method(const json& entry) {
-  const std::string spec = entry.value("spec", "");
-  const std::string method = spec.substr(0, spec.find(':'));
-  return method == "aabb" || method == "obb" || method == "hull";
-}
-
 // The container holds the contents (both triangle meshes). `names` say which is which in
-// the counterexample ("mesh vertex 12 ... is outside the proxy").
-json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& contents, bool convex_parts,
+// the counterexample ("mesh vertex 12 ... is outside the proxy"). With `solid`, the
+// contents' solid must lie in the container's (an inside proxy made of triangles).
+json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& contents, bool solid,
                             const char* contents_name, const char* container_name) {
-  const Containment containment =
-      check_containment(container, contents, {.check_surface = !convex_parts, .convex_components = convex_parts});
+  const Containment containment = check_containment(container, contents, {.check_surface = true, .contents_solid = solid});
   json result = {{"checked",
                   {{"vertices", containment.vertices_checked},
                    {"vertices_on_surface", containment.vertices_on_boundary},
-                   {"triangles_tested", convex_parts ? "each in one convex part" : "no surface contact"}}}};
+                   {"triangles_touching", containment.triangles_touching},
+                   {"triangles_in_convex_parts", containment.triangles_in_convex_parts}}}};
   result["holds"] = containment.contained();
+  auto open_edge = [](const EdgeBalance& edges) {
+    return "edge " + std::to_string(edges.first_low) + "-" + std::to_string(edges.first_high) + " is used " +
+           std::to_string(edges.first_forward) + " times from " + std::to_string(edges.first_low) + " and " +
+           std::to_string(edges.first_backward) + " times from " + std::to_string(edges.first_high) + " (" +
+           std::to_string(edges.unbalanced_edges) + " such edges)";
+  };
   std::string counterexample;
-  if (containment.first_vertex_outside) {
+  result["margin"] = 0.0;
+  if (!containment.container_edges.balanced()) {
+    counterexample = std::string("the ") + container_name + " is not closed, so it bounds no solid: its " +
+                     open_edge(containment.container_edges);
+    result["margin"] = nullptr;
+  } else if (!containment.contents_edges.balanced()) {
+    counterexample = std::string("the ") + contents_name + " is not closed, so it bounds no solid: its " +
+                     open_edge(containment.contents_edges);
+    result["margin"] = nullptr;
+  } else if (containment.first_vertex_outside) {
     const Vertex& p = contents.positions[*containment.first_vertex_outside];
     counterexample = std::string(contents_name) + " vertex " + std::to_string(*containment.first_vertex_outside) + " " +
                      point_text(p) + " is outside the " + container_name;
     const std::vector<Vertex> outside{p};
     result["margin"] = -closest_distance_to_surface(container, outside).distance;
-  } else if (containment.first_crossing) {
-    counterexample = std::string(contents_name) + " triangle " + std::to_string(containment.first_crossing->second) +
-                     " meets " + container_name + " triangle " + std::to_string(containment.first_crossing->first);
-    result["margin"] = 0.0;
-  } else if (containment.first_triangle_split) {
-    counterexample = std::string(contents_name) + " triangle " + std::to_string(*containment.first_triangle_split) +
-                     " has its corners in different convex parts of the " + container_name;
-    result["margin"] = 0.0;
+  } else if (containment.first_unproved) {
+    counterexample = std::string(contents_name) + " triangle " + std::to_string(containment.first_unproved->second) +
+                     " meets " + container_name + " triangle " + std::to_string(containment.first_unproved->first) +
+                     (solid ? "" : " and lies in no convex part of the " + std::string(container_name));
+  } else if (containment.first_container_vertex_inside) {
+    counterexample = std::string(container_name) + " vertex " + std::to_string(*containment.first_container_vertex_inside) +
+                     " " + point_text(container.positions[*containment.first_container_vertex_inside]) +
+                     " lies inside the " + contents_name + ", so the " + contents_name + "'s solid holds part of the " +
+                     container_name + "'s surface";
   } else {
     result["margin"] = closest_distance_to_surface(container, used_positions(contents)).distance;
   }
@@ -77,12 +89,16 @@ json check_sphere_containment(const TriangleMesh& mesh, const std::vector<Sphere
   return result;
 }
 
+// Why the mesh bounds no solid, or nothing: closed means every edge used as often in
+// each direction (self-intersections and non-manifold edges are fine).
 std::string closed_mesh_problem(const TriangleMesh& mesh) {
+  const EdgeBalance edges = check_edge_balance(mesh);
+  if (edges.balanced()) return {};
   const MeshTopology topology = analyze_topology(mesh);
-  if (!topology.closed()) return "the mesh has " + std::to_string(topology.boundary_edges) + " boundary edges, so it has no inside";
-  if (!topology.manifold()) return "the mesh is not manifold, so its inside is not defined";
-  if (!topology.consistently_oriented()) return "the mesh is not consistently oriented, so its inside is not defined";
-  return {};
+  if (topology.boundary_edges > 0)
+    return "the mesh has " + std::to_string(topology.boundary_edges) + " boundary edges, so it has no inside";
+  return "the mesh is not closed: " + std::to_string(edges.unbalanced_edges) +
+         " edges are not used as often in one direction as in the other (inconsistent orientation), so its inside is not defined";
 }
 
 }  // namespace
@@ -94,7 +110,13 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
   json result;
   switch (kind) {
     case ProxyKind::outside: {
-      result = check_mesh_containment(proxy.mesh, mesh, is_convex_method(entry), "mesh", "proxy");
+      if (proxy.type == PrimitiveType::sphere) {
+        result = {{"holds", false}, {"margin", nullptr}, {"checked", json::object()},
+                  {"counterexample", "an outside claim is proved for triangle proxies only, and this proxy is a sphere set"}};
+        result["claim"] = "contains the mesh";
+        break;
+      }
+      result = check_mesh_containment(proxy.mesh, mesh, false, "mesh", "proxy");
       result["claim"] = "contains the mesh";
       break;
     }
@@ -110,7 +132,7 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
         result.update(check_sphere_containment(mesh, proxy.spheres));
         break;
       }
-      json checked = check_mesh_containment(mesh, proxy.mesh, false, "proxy", "mesh");
+      json checked = check_mesh_containment(mesh, proxy.mesh, true, "proxy", "mesh");
       checked["claim"] = result["claim"];
       result = std::move(checked);
       break;
@@ -133,8 +155,26 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
       break;
     }
   }
+  result["mesh_hash"] = content_hash(mesh);
+  result["proxy_hash"] = proxy_content_hash(proxy);
   result["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+std::string proxy_content_hash(const ProxyGeometry& proxy) {
+  std::vector<unsigned char> bytes(proxy.spheres.size() * 4 * sizeof(double));
+  for (std::size_t i = 0; i < proxy.spheres.size(); ++i) {
+    const double values[4] = {proxy.spheres[i].center.x(), proxy.spheres[i].center.y(), proxy.spheres[i].center.z(),
+                              proxy.spheres[i].radius};
+    std::memcpy(bytes.data() + i * sizeof values, values, sizeof values);
+  }
+  return content_hash(proxy.mesh, bytes);
+}
+
+bool verdict_proves(const json& verify, const TriangleMesh& mesh, const ProxyGeometry& proxy) {
+  return verify.is_object() && verify.value("holds", false) && verify.value("claim", std::string("none")) != "none" &&
+         verify.value("mesh_hash", std::string()) == content_hash(mesh) &&
+         verify.value("proxy_hash", std::string()) == proxy_content_hash(proxy);
 }
 
 }  // namespace visproxy

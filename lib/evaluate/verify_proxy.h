@@ -13,14 +13,18 @@ struct VerifyOptions {
   std::uint64_t seed = 1;
 };
 
-/// Checks one proxy against the mesh it was built from, exactly:
-///  - outside (contains the mesh): every vertex of the mesh inside or on the proxy by exact
-///    winding numbers; for proxies that are not convex, also no mesh triangle touching the
-///    proxy's surface; for convex proxies built per component, every mesh triangle inside
-///    one convex part;
-///  - inside, meshes (lies within the mesh): the same with the roles swapped, which needs a
-///    closed mesh; spheres: each centre strictly inside and each radius at most the exact
-///    distance from the centre to the surface;
+/// Checks one proxy against the mesh it was built from, exactly, from the files alone:
+/// nothing but the entry's kind is read from the manifest (not the spec, the method or
+/// what the builder reported), so a proxy file edited by hand is judged as it is.
+///  - outside (contains the mesh), check_containment(proxy, mesh): the proxy closed (every
+///    edge used as often in each direction), every mesh vertex inside or on it by exact
+///    winding numbers, and every mesh triangle either touching no proxy triangle or lying
+///    in one convex part of the proxy (convexity tested with exact predicates);
+///  - inside, meshes (lies within the mesh): the mesh closed, and the proxy's solid within
+///    the mesh's (proxy closed, its vertices inside, no triangles touching, no mesh vertex
+///    inside the proxy); spheres: each centre strictly inside and each radius at most the
+///    exact distance from the centre to the surface. A closed mesh may self-intersect or
+///    have non-manifold edges: its solid is where the winding number is not zero;
 ///  - general: no claim; the sampled two-sided Hausdorff distance is recorded.
 /// Returns the manifest's `verify` object:
 ///   {"claim", "holds", "margin", "seconds", "checked", "counterexample", ...}
@@ -28,7 +32,17 @@ struct VerifyOptions {
 /// the container's surface in world units (null for general proxies), and
 /// `counterexample` is null or one line naming the first vertex, triangle or sphere that
 /// breaks the claim.
+/// The object also records `mesh_hash` and `proxy_hash` (content_hash of the mesh and
+/// proxy_content_hash of the proxy), the files the verdict was made on.
 nlohmann::json verify_proxy(const TriangleMesh& mesh, const nlohmann::json& manifest, const nlohmann::json& entry,
                             const ProxyGeometry& proxy, const VerifyOptions& options = {});
+
+/// content_hash of a proxy's geometry: its triangles, and its spheres' bytes mixed in.
+std::string proxy_content_hash(const ProxyGeometry& proxy);
+
+/// Whether a recorded `verify` object (verify_proxy's) is a proof of the entry's claim for
+/// these very files: it holds, and its mesh and proxy hashes are those of `mesh` and `proxy`.
+/// False for a verdict made on other files (a proxy edited by hand since) or none.
+bool verdict_proves(const nlohmann::json& verify, const TriangleMesh& mesh, const ProxyGeometry& proxy);
 
 }  // namespace visproxy

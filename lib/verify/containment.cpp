@@ -1,4 +1,4 @@
-// Exact point location and surface crossing tests (CGAL, exact predicates on doubles).
+// Exact point location and surface containment (CGAL, exact predicates on doubles).
 
 #include "verify/containment.h"
 
@@ -7,19 +7,22 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
+#include <CGAL/convex_hull_3.h>
 #include <CGAL/intersections.h>
+#include <CGAL/squared_distance_3.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cassert>
 #include <cmath>
 #include <limits>
-#include <cassert>
 #include <optional>
+#include <variant>
 
 #include "core/errors.h"
 #include "core/random.h"
-#include "mesh/mesh_topology.h"
 
 namespace visproxy {
 namespace {
@@ -42,6 +45,32 @@ Triangles triangles_of(const TriangleMesh& mesh) {
     triangles.emplace_back(to_point(mesh.positions[t[0]]), to_point(mesh.positions[t[1]]),
                            to_point(mesh.positions[t[2]]));
   return triangles;
+}
+
+void require_in_range(const TriangleMesh& mesh, const char* what) {
+  if (const std::optional<std::size_t> vertex = first_vertex_out_of_range(mesh))
+    throw InvalidInputError("", std::string(what) + " vertex " + std::to_string(*vertex) +
+                                    " is not finite or beyond 1e100 in magnitude: exact containment cannot be decided");
+}
+
+// A triangle as the point set it is: a proper triangle, or (degenerate) a segment or a point.
+using Shape = std::variant<CgalTriangle, CgalSegment, Point>;
+
+Shape shape_of(const CgalTriangle& t) {
+  if (!t.is_degenerate()) return t;
+  const Point &a = t[0], &b = t[1], &c = t[2];
+  if (a == b && b == c) return a;
+  // Collinear: the segment between the two points that hold the third between them.
+  if (CGAL::collinear_are_ordered_along_line(a, c, b) && a != b) return CgalSegment(a, b);
+  if (CGAL::collinear_are_ordered_along_line(a, b, c) && a != c) return CgalSegment(a, c);
+  return CgalSegment(b, c);
+}
+
+// Whether a proper (non-degenerate) triangle meets a shape, exactly.
+bool meets(const CgalTriangle& proper, const Shape& shape) {
+  if (const auto* t = std::get_if<CgalTriangle>(&shape)) return CGAL::do_intersect(proper, *t);
+  if (const auto* s = std::get_if<CgalSegment>(&shape)) return CGAL::do_intersect(proper, *s);
+  return proper.has_on(std::get<Point>(shape));
 }
 
 // Signed crossings of segment pq with the triangles; nullopt when pq meets an edge or a
@@ -75,11 +104,191 @@ std::optional<int> winding_along(const Tree& tree, const Point& p, const Point& 
   return winding;
 }
 
+// Whether every point lies behind or on the plane of every triangle (its inner side:
+// CGAL's negative side of the oriented plane), exactly; `strictly_behind_one` tells
+// whether some point lies strictly behind some plane. Planes in parallel.
+bool behind_or_on_every_plane(const Triangles& planes, const std::vector<Point>& points, bool* strictly_behind_one = nullptr) {
+  std::atomic<bool> outside{false}, strictly{false};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes.size(), 16), [&](const tbb::blocked_range<std::size_t>& range) {
+    bool local_strictly = false;
+    for (std::size_t f = range.begin(); f != range.end() && !outside.load(std::memory_order_relaxed); ++f) {
+      const CgalTriangle& t = planes[f];
+      for (const Point& p : points) {
+        const CGAL::Orientation side = CGAL::orientation(t[0], t[1], t[2], p);
+        if (side == CGAL::POSITIVE) {
+          outside = true;
+          break;
+        }
+        local_strictly = local_strictly || side == CGAL::NEGATIVE;
+      }
+    }
+    if (local_strictly) strictly = true;
+  });
+  if (strictly_behind_one) *strictly_behind_one = strictly;
+  return !outside;
+}
+
+// The points that can be farthest out along any direction: the vertices of their convex
+// hull (all of them when there are few). A convex set holds the points when it holds these.
+std::vector<Point> extreme_points(std::vector<Point> points) {
+  std::sort(points.begin(), points.end());
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  if (points.size() <= 64) return points;
+  std::vector<Point> extreme;
+  CGAL::extreme_points_3(points, std::back_inserter(extreme));
+  return extreme;
+}
+
+// The connected components of a container with the non-degenerate triangles of each (its
+// face planes), its bounding box and, once asked, whether it is convex: its own vertices
+// behind or on all of its planes and at least one strictly behind one (not flat).
+class ConvexParts {
+ public:
+  ConvexParts(const TriangleMesh& mesh, const Triangles& triangles) : mesh_(mesh), triangles_(triangles) {
+    std::size_t count = 0;
+    component_of_triangle_ = triangle_components(mesh, &count);
+    parts_.resize(count);
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      Part& part = parts_[component_of_triangle_[t]];
+      part.triangles.push_back(static_cast<std::uint32_t>(t));
+      for (const VertexIndex v : mesh.triangles[t]) part.box.extend(mesh.positions[v]);
+    }
+  }
+  std::size_t count() const { return parts_.size(); }
+  std::uint32_t part_of_triangle(std::uint32_t t) const { return component_of_triangle_[t]; }
+  const BoundingBox& box(std::size_t part) const { return parts_[part].box; }
+
+  bool convex(std::size_t index) {
+    Part& part = parts_[index];
+    if (!part.convex) {
+      std::vector<Point> vertices;
+      for (const std::uint32_t t : part.triangles) {
+        if (!triangles_[t].is_degenerate()) part.planes.push_back(triangles_[t]);
+        for (const VertexIndex v : mesh_.triangles[t]) vertices.push_back(to_point(mesh_.positions[v]));
+      }
+      bool not_flat = false;
+      part.convex = !part.planes.empty() && behind_or_on_every_plane(part.planes, extreme_points(std::move(vertices)), &not_flat) && not_flat;
+    }
+    return *part.convex;
+  }
+  /// Whether the part is convex and holds every point behind or on its planes.
+  bool holds(std::size_t index, const std::vector<Point>& points) {
+    return convex(index) && behind_or_on_every_plane(parts_[index].planes, points);
+  }
+
+ private:
+  struct Part {
+    std::vector<std::uint32_t> triangles;
+    BoundingBox box;
+    Triangles planes;
+    std::optional<bool> convex;
+  };
+  const TriangleMesh& mesh_;
+  const Triangles& triangles_;
+  std::vector<std::uint32_t> component_of_triangle_;
+  std::vector<Part> parts_;
+};
+
+bool box_holds(const BoundingBox& outer, const BoundingBox& inner) {
+  return (outer.min.array() <= inner.min.array()).all() && (inner.max.array() <= outer.max.array()).all();
+}
+
+// The triangles of `touching` (contents triangles, each with the container triangles it
+// meets) that lie in no convex part of the container: first, for each part a triangle
+// touches first, all such triangles' corners at once (their extreme points); then, for
+// those left, each triangle's corners against every convex part whose box holds it.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> outside_convex_parts(
+    const TriangleMesh& container, const Triangles& container_triangles, const TriangleMesh& contents,
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossings, std::size_t& proved) {
+  ConvexParts parts(container, container_triangles);
+  // Contents triangle -> first container triangle it meets (crossings are sorted by
+  // container triangle, so take the lowest per contents triangle).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> first;  // (contents, container)
+  for (const auto& [a, b] : crossings) first.emplace_back(b, a);
+  std::sort(first.begin(), first.end());
+  first.erase(std::unique(first.begin(), first.end(), [](const auto& x, const auto& y) { return x.first == y.first; }),
+              first.end());
+  auto corners = [&](std::uint32_t t) {
+    std::vector<Point> points;
+    for (const VertexIndex v : contents.triangles[t]) points.push_back(to_point(contents.positions[v]));
+    return points;
+  };
+  // Group by the part of the first container triangle met.
+  std::vector<std::vector<std::uint32_t>> by_part(parts.count());
+  for (const auto& [t, a] : first) by_part[parts.part_of_triangle(a)].push_back(t);
+  std::vector<std::uint32_t> left;
+  for (std::size_t part = 0; part < by_part.size(); ++part) {
+    if (by_part[part].empty()) continue;
+    std::vector<Point> points;
+    for (const std::uint32_t t : by_part[part])
+      for (const Point& p : corners(t)) points.push_back(p);
+    if (parts.holds(part, extreme_points(std::move(points))))
+      proved += by_part[part].size();
+    else
+      left.insert(left.end(), by_part[part].begin(), by_part[part].end());
+  }
+  std::sort(left.begin(), left.end());
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> unproved;
+  for (const std::uint32_t t : left) {
+    BoundingBox box;
+    for (const VertexIndex v : contents.triangles[t]) box.extend(contents.positions[v]);
+    bool held = false;
+    const std::vector<Point> points = corners(t);
+    for (std::size_t part = 0; part < parts.count() && !held; ++part)
+      held = box_holds(parts.box(part), box) && parts.holds(part, points);
+    if (held) {
+      ++proved;
+    } else {
+      const auto it = std::lower_bound(first.begin(), first.end(), std::pair<std::uint32_t, std::uint32_t>(t, 0));
+      unproved.emplace_back(it->second, t);
+    }
+  }
+  std::sort(unproved.begin(), unproved.end());
+  return unproved;
+}
+
+// Squared distance between two shapes in double precision (accurate to rounding). Two
+// disjoint convex sets are closest at a feature of one's boundary: a segment and a
+// triangle at an endpoint or at one of the triangle's edges.
+double squared_between(const Shape& x, const Shape& y) {
+  struct Visitor {
+    double operator()(const CgalTriangle& t, const CgalSegment& s) const {
+      double best = std::min(CGAL::squared_distance(s.source(), t), CGAL::squared_distance(s.target(), t));
+      for (int k = 0; k < 3; ++k) best = std::min(best, CGAL::squared_distance(s, CgalSegment(t[k], t[(k + 1) % 3])));
+      return best;
+    }
+    double operator()(const CgalSegment& s, const CgalTriangle& t) const { return (*this)(t, s); }
+    double operator()(const CgalTriangle& a, const CgalTriangle& b) const { return CGAL::squared_distance(a, b); }
+    double operator()(const CgalTriangle& t, const Point& p) const { return CGAL::squared_distance(p, t); }
+    double operator()(const Point& p, const CgalTriangle& t) const { return CGAL::squared_distance(p, t); }
+    double operator()(const CgalSegment& a, const CgalSegment& b) const { return CGAL::squared_distance(a, b); }
+    double operator()(const CgalSegment& s, const Point& p) const { return CGAL::squared_distance(p, s); }
+    double operator()(const Point& p, const CgalSegment& s) const { return CGAL::squared_distance(p, s); }
+    double operator()(const Point& p, const Point& q) const { return CGAL::squared_distance(p, q); }
+  };
+  return std::visit(Visitor{}, x, y);
+}
+
+std::vector<Box> boxes_of(const Triangles& triangles, double grow = 0) {
+  std::vector<Box> boxes;
+  boxes.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    CGAL::Bbox_3 b = triangles[t].bbox();
+    if (grow > 0) b = CGAL::Bbox_3(b.xmin() - grow, b.ymin() - grow, b.zmin() - grow, b.xmax() + grow, b.ymax() + grow, b.zmax() + grow);
+    boxes.emplace_back(b, static_cast<std::uint32_t>(t));
+  }
+  return boxes;
+}
+
 }  // namespace
 
 std::vector<PointLocation> locate_points(const TriangleMesh& container, std::span<const Vertex> points) {
   std::vector<PointLocation> locations(points.size(), PointLocation::outside);
   if (container.triangles.empty() || points.empty()) return locations;
+  require_in_range(container, "container");
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!(points[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      throw InvalidInputError("", "point " + std::to_string(i) + " to locate is not finite or beyond 1e100 in magnitude");
   const Triangles triangles = triangles_of(container);
   Tree tree(triangles.begin(), triangles.end());
   tree.build();
@@ -120,21 +329,13 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> find_crossing_triangles(con
                                                                               const TriangleMesh& contents) {
   const Triangles a = triangles_of(container);
   const Triangles b = triangles_of(contents);
-  auto boxes_of = [](const Triangles& triangles) {
-    std::vector<Box> boxes;
-    boxes.reserve(triangles.size());
-    for (std::size_t t = 0; t < triangles.size(); ++t)
-      boxes.emplace_back(triangles[t].bbox(), static_cast<std::uint32_t>(t));
-    return boxes;
-  };
   std::vector<Box> a_boxes = boxes_of(a);
   std::vector<Box> b_boxes = boxes_of(b);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> crossings;
   CGAL::box_intersection_d(a_boxes.begin(), a_boxes.end(), b_boxes.begin(), b_boxes.end(),
                            [&](const Box& x, const Box& y) {
                              const CgalTriangle& ta = a[x.info()];
-                             const CgalTriangle& tb = b[y.info()];
-                             if (!ta.is_degenerate() && !tb.is_degenerate() && CGAL::do_intersect(ta, tb))
+                             if (!ta.is_degenerate() && meets(ta, shape_of(b[y.info()])))
                                crossings.emplace_back(x.info(), y.info());
                            });
   std::sort(crossings.begin(), crossings.end());
@@ -143,6 +344,16 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> find_crossing_triangles(con
 
 Containment check_containment(const TriangleMesh& container, const TriangleMesh& contents,
                               const ContainmentOptions& options) {
+  Containment result;
+  result.container_edges = check_edge_balance(container);
+  if (container.triangles.empty()) result.container_edges.unbalanced_edges = std::max<std::size_t>(result.container_edges.unbalanced_edges, 1);
+  if (!result.container_edges.balanced()) return result;
+  if (options.contents_solid) {
+    result.contents_edges = check_edge_balance(contents);
+    if (!result.contents_edges.balanced()) return result;
+  }
+  require_in_range(contents, "contents");
+
   std::vector<std::uint8_t> used(contents.positions.size(), 0);
   for (const Triangle& t : contents.triangles)
     for (VertexIndex v : t) used[v] = 1;
@@ -153,43 +364,44 @@ Containment check_containment(const TriangleMesh& container, const TriangleMesh&
       points.push_back(contents.positions[v]);
       point_vertex.push_back(static_cast<VertexIndex>(v));
     }
-
-  Containment result;
   result.vertices_checked = points.size();
   const std::vector<PointLocation> locations = locate_points(container, points);
   for (std::size_t i = 0; i < locations.size(); ++i) {
-    if (locations[i] == PointLocation::outside) {
-      if (result.vertices_outside++ == 0) result.first_vertex_outside = point_vertex[i];
-    }
+    if (locations[i] == PointLocation::outside && result.vertices_outside++ == 0) result.first_vertex_outside = point_vertex[i];
     if (locations[i] == PointLocation::on_boundary) ++result.vertices_on_boundary;
   }
+  if (!options.check_surface) return result;
 
-  if (options.convex_components) {
-    std::vector<bool> vertex_contained(contents.positions.size(), true);
-    for (std::size_t i = 0; i < points.size(); ++i)
-      vertex_contained[point_vertex[i]] = locations[i] != PointLocation::outside;
-    const std::vector<TriangleMesh> pieces = split_components(container);
-    std::vector<std::vector<bool>> in_piece(pieces.size());
-    for (std::size_t c = 0; c < pieces.size(); ++c) {
-      in_piece[c].assign(contents.positions.size(), false);
-      const std::vector<PointLocation> piece_locations = locate_points(pieces[c], points);
-      for (std::size_t i = 0; i < points.size(); ++i)
-        in_piece[c][point_vertex[i]] = piece_locations[i] != PointLocation::outside;
-    }
-    for (std::size_t t = 0; t < contents.triangles.size(); ++t) {
-      const Triangle& triangle = contents.triangles[t];
-      bool all_contained = true, together = false;
-      for (VertexIndex v : triangle) all_contained = all_contained && vertex_contained[v];
-      for (std::size_t c = 0; c < pieces.size() && !together; ++c)
-        together = in_piece[c][triangle[0]] && in_piece[c][triangle[1]] && in_piece[c][triangle[2]];
-      if (all_contained && !together && result.triangles_split++ == 0)
-        result.first_triangle_split = static_cast<std::uint32_t>(t);
-    }
-  } else if (options.check_surface) {
-    result.surface_checked = true;
-    const auto crossings = find_crossing_triangles(container, contents);
-    result.crossing_triangle_pairs = crossings.size();
-    if (!crossings.empty()) result.first_crossing = crossings.front();
+  result.surface_checked = true;
+  const auto crossings = find_crossing_triangles(container, contents);
+  {
+    std::vector<std::uint32_t> touching;
+    for (const auto& pair : crossings) touching.push_back(pair.second);
+    std::sort(touching.begin(), touching.end());
+    result.triangles_touching = static_cast<std::size_t>(std::unique(touching.begin(), touching.end()) - touching.begin());
+  }
+  if (options.contents_solid) {
+    // No touching allowed; and no container vertex inside the contents' solid.
+    result.triangles_unproved = result.triangles_touching;
+    if (!crossings.empty()) result.first_unproved = crossings.front();
+    std::vector<Vertex> container_points;
+    std::vector<VertexIndex> container_vertex;
+    std::vector<std::uint8_t> container_used(container.positions.size(), 0);
+    for (const Triangle& t : container.triangles)
+      for (VertexIndex v : t) container_used[v] = 1;
+    for (std::size_t v = 0; v < container_used.size(); ++v)
+      if (container_used[v]) container_points.push_back(container.positions[v]), container_vertex.push_back(static_cast<VertexIndex>(v));
+    const std::vector<PointLocation> in_contents = locate_points(contents, container_points);
+    for (std::size_t i = 0; i < in_contents.size(); ++i)
+      if (in_contents[i] != PointLocation::outside && result.container_vertices_inside_contents++ == 0)
+        result.first_container_vertex_inside = container_vertex[i];
+    return result;
+  }
+  if (!crossings.empty()) {
+    const std::vector<std::pair<std::uint32_t, std::uint32_t>> unproved =
+        outside_convex_parts(container, triangles_of(container), contents, crossings, result.triangles_in_convex_parts);
+    result.triangles_unproved = unproved.size();
+    if (!unproved.empty()) result.first_unproved = unproved.front();
   }
   return result;
 }
@@ -209,6 +421,35 @@ ClosestDistance closest_distance_to_surface(const TriangleMesh& mesh, std::span<
   closest.distance = std::sqrt(*smallest);
   closest.point = static_cast<std::size_t>(smallest - squared.begin());
   return closest;
+}
+
+bool surfaces_clear_by(const TriangleMesh& a, const TriangleMesh& b, double distance) {
+  if (a.triangles.empty() || b.triangles.empty()) return true;
+  require_in_range(a, "first surface");
+  require_in_range(b, "second surface");
+  const Triangles ta = triangles_of(a), tb = triangles_of(b);
+  const double magnitude = std::max(bounding_box(a).max.cwiseAbs().maxCoeff(), bounding_box(a).min.cwiseAbs().maxCoeff()) +
+                           std::max(bounding_box(b).max.cwiseAbs().maxCoeff(), bounding_box(b).min.cwiseAbs().maxCoeff());
+  // Rounding of the distances computed in double: relative to the coordinates involved.
+  const double required = distance * (1 + 1e-9) + 0x1.0p-40 * magnitude;
+  std::vector<Box> a_boxes = boxes_of(ta, required), b_boxes = boxes_of(tb);
+  bool clear = true;
+  CGAL::box_intersection_d(a_boxes.begin(), a_boxes.end(), b_boxes.begin(), b_boxes.end(), [&](const Box& x, const Box& y) {
+    if (!clear) return;
+    const Shape u = shape_of(ta[x.info()]), v = shape_of(tb[y.info()]);
+    const auto* proper_u = std::get_if<CgalTriangle>(&u);
+    const auto* proper_v = std::get_if<CgalTriangle>(&v);
+    if ((proper_u && meets(*proper_u, v)) || (proper_v && meets(*proper_v, u))) {
+      clear = false;
+      return;
+    }
+    if (!proper_u && !proper_v && squared_between(u, v) == 0) {
+      clear = false;
+      return;
+    }
+    if (squared_between(u, v) <= required * required) clear = false;
+  });
+  return clear;
 }
 
 }  // namespace visproxy

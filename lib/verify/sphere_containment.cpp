@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "mesh/mesh_topology.h"
 #include "verify/containment.h"
 
 namespace visproxy {
@@ -29,6 +30,8 @@ using Primitive = CGAL::AABB_triangle_primitive<Kernel, Triangles::const_iterato
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 using Exact = CGAL::Exact_predicates_exact_constructions_kernel;
 
+constexpr double kHuge = std::numeric_limits<double>::infinity();
+
 Point to_point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
 Exact::Point_3 to_exact(const Point& p) { return {p.x(), p.y(), p.z()}; }
 
@@ -36,51 +39,37 @@ Exact::Point_3 to_exact(const Point& p) { return {p.x(), p.y(), p.z()}; }
 // well defined everywhere off the surface.
 void require_closed(const TriangleMesh& mesh) {
   if (mesh.triangles.empty()) throw InvalidInputError("", "the mesh has no triangles: nothing lies inside it");
-  std::vector<std::pair<std::uint64_t, int>> edges;
-  edges.reserve(3 * mesh.triangles.size());
   for (const Triangle& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const VertexIndex a = t[k], b = t[(k + 1) % 3];
-      if (a >= mesh.positions.size() || b >= mesh.positions.size())
-        throw InvalidInputError("", "a triangle refers to vertex " + std::to_string(std::max(a, b)) +
-                                        ", which does not exist");
-      if (a == b) continue;
-      const auto low = std::min(a, b), high = std::max(a, b);
-      edges.emplace_back((std::uint64_t{low} << 32) | high, a < b ? 1 : -1);
-    }
-  std::sort(edges.begin(), edges.end());
-  std::size_t unbalanced = 0;
-  for (std::size_t i = 0; i < edges.size();) {
-    int balance = 0;
-    std::size_t j = i;
-    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) balance += edges[j].second;
-    if (balance != 0) ++unbalanced;
-    i = j;
-  }
-  if (unbalanced > 0)
-    throw InvalidInputError("", std::to_string(unbalanced) +
+    for (const VertexIndex v : t)
+      if (v >= mesh.positions.size())
+        throw InvalidInputError("", "a triangle refers to vertex " + std::to_string(v) + ", which does not exist");
+  const EdgeBalance balance = check_edge_balance(mesh);
+  if (!balance.balanced())
+    throw InvalidInputError("", std::to_string(balance.unbalanced_edges) +
                                     " edges are not used equally often in both directions (boundary or inconsistent "
-                                    "orientation): the mesh does not bound a solid, so nothing can be proved inside it");
+                                    "orientation; the first is " + std::to_string(balance.first_low) + "-" +
+                                    std::to_string(balance.first_high) + "): the mesh does not bound a solid, so "
+                                    "nothing can be proved inside it");
 }
 
 }  // namespace
 
-SphereContainment check_spheres_inside(const TriangleMesh& watertight_mesh, std::span<const Sphere> spheres) {
+SphereContainment check_spheres_inside(const TriangleMesh& closed_mesh, std::span<const Sphere> spheres) {
   SphereContainment result;
   result.spheres_checked = spheres.size();
-  require_closed(watertight_mesh);
+  require_closed(closed_mesh);
   if (spheres.empty()) return result;
 
   std::vector<Vertex> centers;
   centers.reserve(spheres.size());
   for (const Sphere& sphere : spheres) centers.push_back(sphere.center.allFinite() ? sphere.center : Vertex::Zero());
-  const std::vector<PointLocation> locations = locate_points(watertight_mesh, centers);
+  const std::vector<PointLocation> locations = locate_points(closed_mesh, centers);
 
   Triangles triangles;
-  triangles.reserve(watertight_mesh.triangles.size());
-  for (const Triangle& t : watertight_mesh.triangles)
-    triangles.emplace_back(to_point(watertight_mesh.positions[t[0]]), to_point(watertight_mesh.positions[t[1]]),
-                           to_point(watertight_mesh.positions[t[2]]));
+  triangles.reserve(closed_mesh.triangles.size());
+  for (const Triangle& t : closed_mesh.triangles)
+    triangles.emplace_back(to_point(closed_mesh.positions[t[0]]), to_point(closed_mesh.positions[t[1]]),
+                           to_point(closed_mesh.positions[t[2]]));
   Tree tree(triangles.begin(), triangles.end());
   tree.build();
   tree.accelerate_distance_queries();
@@ -97,17 +86,31 @@ SphereContainment check_spheres_inside(const TriangleMesh& watertight_mesh, std:
 
     bool passes = inside;
     if (passes && sphere.radius > 0) {
-      // Candidates: triangles meeting the closed ball of a squared radius at least radius^2
-      // (the rounded square, enlarged by more than its rounding error); decided exactly.
-      const double squared_radius_up = sphere.radius * sphere.radius * (1.0 + 0x1.0p-50);
+      // Candidates: every triangle whose box meets the ball's box, which holds every
+      // triangle that comes within the radius, those wholly inside the ball too (a sphere
+      // query would miss them: they do not meet the sphere's surface). The box is the
+      // ball's, widened by an ulp of each bound so that rounding cannot shrink it; each
+      // candidate is then decided exactly. Degenerate triangles bound nothing.
+      const double low[3] = {std::nextafter(center.x() - sphere.radius, -kHuge), std::nextafter(center.y() - sphere.radius, -kHuge),
+                             std::nextafter(center.z() - sphere.radius, -kHuge)};
+      const double high[3] = {std::nextafter(center.x() + sphere.radius, kHuge), std::nextafter(center.y() + sphere.radius, kHuge),
+                              std::nextafter(center.z() + sphere.radius, kHuge)};
       near.clear();
-      tree.all_intersected_primitives(Kernel::Sphere_3(center, squared_radius_up), std::back_inserter(near));
+      tree.all_intersected_primitives(CGAL::Bbox_3(low[0], low[1], low[2], high[0], high[1], high[2]), std::back_inserter(near));
       if (!near.empty()) {
         const Exact::Point_3 exact_center = to_exact(center);
         const Exact::FT radius(sphere.radius);
         const Exact::FT squared_radius = radius * radius;
+        const double squared = sphere.radius * sphere.radius;
         for (const Tree::Primitive_id& id : near) {
           const CgalTriangle& t = *id;
+          if (t.is_degenerate()) continue;
+          // A filter: the distance in double is within 1e-12 of the largest squared distance
+          // to a corner (thousands of ulps of its rounding error); triangles clearly farther
+          // than the radius need no exact arithmetic.
+          double reach = 0;
+          for (int k = 0; k < 3; ++k) reach = std::max(reach, CGAL::squared_distance(center, t[k]));
+          if (CGAL::squared_distance(center, t) - 1e-12 * reach > squared * (1 + 0x1.0p-50)) continue;
           const Exact::Triangle_3 exact_triangle(to_exact(t[0]), to_exact(t[1]), to_exact(t[2]));
           if (CGAL::squared_distance(exact_center, exact_triangle) < squared_radius) {
             passes = false;

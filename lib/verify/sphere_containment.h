@@ -21,21 +21,24 @@ struct SphereContainment {
   bool contained() const { return spheres_outside == 0; }
 };
 
-/// Whether every sphere (closed ball) lies inside the solid bounded by `watertight_mesh`.
+/// Whether every sphere (closed ball) lies inside the solid bounded by `closed_mesh`.
 /// A sphere passes when its centre is strictly inside (locate_points: exact winding
 /// number) and radius^2 <= the squared distance from the centre to every triangle, both
 /// sides exact (the radius as the double it is; no tolerance). The ball can then touch the
 /// surface but not cross it. A negative or non-finite radius, or a non-finite centre, fails.
 ///
-/// Triangles near each ball are found with CGAL's AABB tree and an exact ball-triangle
-/// test on a slightly enlarged ball; only those are compared exactly (CGAL's lazy exact
-/// kernel), so the cost is O(#F log #F) to build plus O(log #F) per sphere that does not
-/// touch the surface.
+/// Triangles near each ball are found with CGAL's AABB tree by the ball's bounding box
+/// (so that triangles lying wholly inside the ball are found too); only those are compared
+/// exactly (CGAL's lazy exact kernel), so the cost is O(#F log #F) to build plus O(log #F)
+/// per sphere that does not touch the surface. Degenerate (zero-area) triangles bound
+/// nothing and are not compared.
 ///
-/// Precondition checked: the mesh has triangles and is closed and consistently oriented
-/// (every edge used once each way), otherwise InvalidInputError (empty file name).
-/// Overlapping parts are fine (the solid is where the winding number is not zero; a ball
-/// crossing an inner surface then fails, which is conservative).
-SphereContainment check_spheres_inside(const TriangleMesh& watertight_mesh, std::span<const Sphere> spheres);
+/// Precondition checked: the mesh has triangles and is closed (EdgeBalance: every edge
+/// used as often in each direction), otherwise InvalidInputError (empty file name). The
+/// mesh may self-intersect, have non-manifold edges or overlapping parts: its solid is
+/// where the winding number is not zero, constant off the surface, so a ball whose centre
+/// has a non-zero winding number and that crosses no triangle lies in the solid, and a
+/// segment from a point of winding number 0 to the ball must cross the surface.
+SphereContainment check_spheres_inside(const TriangleMesh& closed_mesh, std::span<const Sphere> spheres);
 
 }  // namespace visproxy

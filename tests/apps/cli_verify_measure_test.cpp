@@ -11,6 +11,7 @@
 
 #include "apps/cli_test_support.h"
 #include "core/files.h"
+#include "mesh/triangle_mesh.h"
 #include "mesh/read_mesh.h"
 #include "mesh/write_mesh.h"
 #include "test_meshes.h"
@@ -95,6 +96,92 @@ TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
   EXPECT_LT(m.at("proxies")[1].at("verify").at("margin").get<double>(), 0.0);
   EXPECT_FALSE(m.at("proxies")[2].at("verify").at("holds").get<bool>());
   EXPECT_TRUE(m.at("proxies")[0].at("verify").at("holds").get<bool>());
+}
+
+// Hand-edited proxy files of a cube's hull, judged as they are: nothing but the kind is
+// read from the manifest.
+class CliVerifyEdited : public testing::ScratchFolder {
+ protected:
+  void SetUp() override {
+    ScratchFolder::SetUp();
+    mesh_ = folder_ / "cube.ply";
+    write_mesh(mesh_, testing::unit_cube());
+    proxies_ = folder_ / "proxies";
+    const auto result = testing::run_visproxy("build '" + mesh_.string() + "' -o '" + proxies_.string() + "' --proxy hull");
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+  }
+  // Replaces hull.ply by `hull` and, as a user editing by hand would, the entry's counts
+  // (and, when given, its spec and method).
+  void edit(const TriangleMesh& hull, const std::string& spec = "") {
+    write_mesh(proxies_ / "hull.ply", hull);
+    json m = json::parse(read_file(proxies_ / "manifest.json"));
+    json& entry = m.at("proxies")[0];
+    entry["triangles"] = hull.triangles.size();
+    entry["primitives"] = hull.triangles.size();
+    entry["vertices"] = hull.positions.size();
+    if (!spec.empty()) entry["spec"] = spec, entry["method"] = spec;
+    write_file_atomically(proxies_ / "manifest.json", m.dump(2));
+  }
+  testing::CommandResult verify() const {
+    return testing::run_visproxy("verify '" + mesh_.string() + "' '" + proxies_.string() + "'");
+  }
+  std::filesystem::path mesh_, proxies_;
+};
+
+TEST_F(CliVerifyEdited, HullWithATriangleRemovedIsNotClosed) {
+  TriangleMesh open = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  open.triangles.pop_back();
+  edit(open);
+  const auto result = verify();
+  EXPECT_EQ(result.exit_code, 1) << result.out << result.err;
+  EXPECT_NE(result.err.find("hull (outside) fails: the proxy is not closed"), std::string::npos) << result.err;
+}
+
+// The top face dented down to the cube's centre: every mesh vertex (the corners) is still
+// on the proxy, but the mesh's top face lies above the dent.
+TEST_F(CliVerifyEdited, DentedHullFailsThoughEveryVertexIsOnIt) {
+  TriangleMesh dented = testing::unit_cube();
+  dented.triangles.erase(dented.triangles.begin() + 2, dented.triangles.begin() + 4);  // the top, z = 1
+  dented.positions.emplace_back(0.5, 0.5, 0.5);
+  for (const Triangle& t : std::vector<Triangle>{{4, 5, 8}, {5, 7, 8}, {7, 6, 8}, {6, 4, 8}}) dented.triangles.push_back(t);
+  edit(dented);
+  const auto result = verify();
+  EXPECT_EQ(result.exit_code, 1) << result.out << result.err;
+  EXPECT_NE(result.err.find("lies in no convex part of the proxy"), std::string::npos) << result.err;
+}
+
+// The verdict follows the file, not the name: the true hull passes under any spec, and a
+// non-convex proxy is not passed for being called a hull.
+TEST_F(CliVerifyEdited, VerdictDoesNotDependOnTheSpecInTheManifest) {
+  const TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  for (const std::string spec : {"wrap", "outer:512", "hull"}) {
+    edit(hull, spec);
+    const auto result = verify();
+    EXPECT_EQ(result.exit_code, 0) << spec << result.err;
+    const json verdict = json::parse(read_file(proxies_ / "manifest.json")).at("proxies")[0].at("verify");
+    EXPECT_TRUE(verdict.at("holds").get<bool>());
+    EXPECT_EQ(verdict.at("checked").at("triangles_in_convex_parts"), 12) << "every face touches the hull";
+    EXPECT_EQ(verdict.at("mesh_hash").get<std::string>().size(), 16u);
+  }
+}
+
+// CGAL's camel and cow are closed but self-intersect (20 and 101 pairs): inside:40 builds,
+// and verify proves every sphere inside their solids by winding number.
+TEST_F(CliVerifyEdited, InsideSpheresOfSelfIntersectingMeshesVerify) {
+  for (const char* name : {"camel.off", "cow.off"}) {
+    const std::string mesh = testing::cgal_mesh(name).string();
+    const std::filesystem::path out = folder_ / name;
+    const auto info = testing::run_visproxy("info --json '" + mesh + "'");
+    ASSERT_EQ(info.exit_code, 0);
+    const json report = json::parse(info.out);
+    EXPECT_TRUE(report.at("self_intersecting").get<bool>()) << name;
+    EXPECT_TRUE(report.at("bounds_solid").get<bool>()) << name;
+    const auto built = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() + "' --proxy inside:40");
+    ASSERT_EQ(built.exit_code, 0) << built.err;
+    const auto verified = testing::run_visproxy("verify '" + mesh + "' '" + out.string() + "'");
+    EXPECT_EQ(verified.exit_code, 0) << verified.out << verified.err;
+    EXPECT_NE(verified.out.find("1 of 1 claims hold"), std::string::npos) << verified.out;
+  }
 }
 
 TEST_F(CliVerifyMeasure, MeasureRecordsFiguresReproducibly) {

@@ -5,6 +5,7 @@
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
 
+#include "core/errors.h"
 #include "core/random.h"
 #include "mesh/read_mesh.h"
 #include "test_meshes.h"
@@ -112,16 +113,18 @@ TEST(CheckContainment, ScaledCopyInsideAndCrossingCopy) {
   const Containment out = check_containment(cube, poking);
   EXPECT_FALSE(out.contained());
   EXPECT_EQ(out.vertices_outside, 1u);
-  EXPECT_GT(out.crossing_triangle_pairs, 0u);
+  EXPECT_GT(out.triangles_touching, 0u);
+  EXPECT_GT(out.triangles_unproved, 0u);  // crossing the cube's faces, they lie in no convex part
   // The counterexamples name the vertex outside (the apex of the tetrahedron) and a pair.
   ASSERT_TRUE(out.first_vertex_outside.has_value());
   EXPECT_GT(poking.positions[*out.first_vertex_outside].z(), 1.0);
-  ASSERT_TRUE(out.first_crossing.has_value());
-  EXPECT_LT(out.first_crossing->first, cube.triangles.size());
-  EXPECT_LT(out.first_crossing->second, poking.triangles.size());
+  ASSERT_TRUE(out.first_unproved.has_value());
+  EXPECT_LT(out.first_unproved->first, cube.triangles.size());
+  EXPECT_LT(out.first_unproved->second, poking.triangles.size());
   EXPECT_FALSE(inside.first_vertex_outside.has_value());
 
-  // A flat triangle lying in the cube's face is on the boundary, and touches it.
+  // A flat triangle lying in the cube's face is on the boundary and touches it: the cube
+  // is convex, so the triangle lies in its solid (the convex-part argument).
   TriangleMesh flat;
   flat.positions = {{0.1, 0.1, 0}, {0.9, 0.1, 0}, {0.1, 0.9, 0}};
   flat.triangles = {{0, 1, 2}};
@@ -129,7 +132,10 @@ TEST(CheckContainment, ScaledCopyInsideAndCrossingCopy) {
   EXPECT_TRUE(touching.contained());
   EXPECT_EQ(touching.vertices_on_boundary, 3u);
   EXPECT_FALSE(touching.surface_checked);
-  EXPECT_FALSE(check_containment(cube, flat).contained());
+  const Containment in_face = check_containment(cube, flat);
+  EXPECT_TRUE(in_face.contained());
+  EXPECT_EQ(in_face.triangles_touching, 1u);
+  EXPECT_EQ(in_face.triangles_in_convex_parts, 1u);
 }
 
 TEST(CheckContainment, SurfaceCrossingWithAllVerticesInsideIsCaught) {
@@ -141,27 +147,149 @@ TEST(CheckContainment, SurfaceCrossingWithAllVerticesInsideIsCaught) {
   sliver.triangles = {{0, 1, 2}};
   const Containment result = check_containment(two, sliver);
   EXPECT_EQ(result.vertices_outside, 0u);
-  EXPECT_GT(result.crossing_triangle_pairs, 0u);
+  EXPECT_EQ(result.triangles_touching, 1u);
   EXPECT_FALSE(result.contained());
 }
 
-TEST(CheckContainment, ConvexComponentsNeedOneComponentHoldingEachTriangle) {
+TEST(CheckContainment, TouchingTrianglesNeedOneConvexPartHoldingThem) {
   const TriangleMesh two = merged(testing::unit_cube(), transformed(testing::unit_cube(), 1, {3, 0, 0}));
   TriangleMesh sliver;
   sliver.positions = {{0.5, 0.5, 0.5}, {3.5, 0.5, 0.5}, {3.5, 0.6, 0.5}};
   sliver.triangles = {{0, 1, 2}};
-  const Containment split = check_containment(two, sliver, {.convex_components = true});
+  const Containment split = check_containment(two, sliver);
   EXPECT_EQ(split.vertices_outside, 0u);
-  EXPECT_EQ(split.triangles_split, 1u);
-  EXPECT_EQ(split.first_triangle_split, 0u);
+  EXPECT_EQ(split.triangles_touching, 1u);
+  EXPECT_EQ(split.triangles_unproved, 1u);
+  ASSERT_TRUE(split.first_unproved.has_value());
+  EXPECT_EQ(split.first_unproved->second, 0u);
   EXPECT_FALSE(split.contained());
-  // A triangle lying in a face of one cube touches it, and is contained: the surface test
-  // would reject it, the convex test accepts it.
+  // A triangle lying in a face of the second cube touches it and is contained; one wholly
+  // inside the first touches nothing.
   TriangleMesh in_face;
   in_face.positions = {{3.1, 0.1, 0}, {3.9, 0.1, 0}, {3.1, 0.9, 0}, {0.2, 0.2, 0.2}, {0.8, 0.2, 0.2}, {0.2, 0.8, 0.9}};
   in_face.triangles = {{0, 1, 2}, {3, 4, 5}};
-  EXPECT_TRUE(check_containment(two, in_face, {.convex_components = true}).contained());
-  EXPECT_FALSE(check_containment(two, in_face).contained());
+  const Containment held = check_containment(two, in_face);
+  EXPECT_TRUE(held.contained());
+  EXPECT_EQ(held.triangles_touching, 1u);
+  EXPECT_EQ(held.triangles_in_convex_parts, 1u);
+}
+
+// The container is read as it is: an outside proxy with a triangle removed bounds no solid,
+// so nothing is contained in it, however inside its vertices look.
+TEST(CheckContainment, OpenContainerContainsNothing) {
+  TriangleMesh open = testing::unit_cube();
+  open.triangles.erase(open.triangles.begin() + 5);
+  const TriangleMesh small = transformed(testing::tetrahedron(), 0.5, {0.2, 0.2, 0.2});
+  const Containment result = check_containment(open, small);
+  EXPECT_FALSE(result.contained());
+  EXPECT_EQ(result.container_edges.unbalanced_edges, 3u);
+  EXPECT_EQ(result.vertices_checked, 0u);  // nothing else is decided
+  // Two cubes, one of them open: the closed one alone would hold its contents, but the
+  // whole container is not closed.
+  TriangleMesh parts = merged(testing::unit_cube(), transformed(open, 1, {3, 0, 0}));
+  EXPECT_FALSE(check_containment(parts, small).contained());
+  // A flipped triangle: every edge still used twice, but one direction twice.
+  TriangleMesh flipped = testing::unit_cube();
+  std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);
+  EXPECT_FALSE(check_containment(flipped, small).contained());
+  EXPECT_FALSE(check_containment(TriangleMesh{}, small).contained());
+}
+
+// A hull whose top is dented inwards: every mesh vertex is still inside, but the dent
+// cuts through a mesh triangle near the top. A check that took convexity on trust (from
+// the proxy's name) and tested vertices only would pass it.
+TEST(CheckContainment, DentedHullIsNotTakenForConvex) {
+  TriangleMesh dented = testing::unit_cube();
+  // Replace the top face (z = 1: triangles {4, 5, 6}, {5, 7, 6}) by four triangles to a
+  // centre vertex pushed down to z = 0.5.
+  dented.triangles.erase(dented.triangles.begin() + 2, dented.triangles.begin() + 4);
+  dented.positions.emplace_back(0.5, 0.5, 0.5);
+  const VertexIndex centre = 8;
+  dented.triangles.push_back({4, 5, centre});
+  dented.triangles.push_back({5, 7, centre});
+  dented.triangles.push_back({7, 6, centre});
+  dented.triangles.push_back({6, 4, centre});
+  ASSERT_TRUE(check_edge_balance(dented).balanced());
+  TriangleMesh contents;  // a flat triangle at z = 0.9 whose corners sit near the top edges
+  contents.positions = {{0.05, 0.05, 0.9}, {0.95, 0.05, 0.9}, {0.5, 0.95, 0.9}};
+  contents.triangles = {{0, 1, 2}};
+  const Containment result = check_containment(dented, contents);
+  EXPECT_EQ(result.vertices_outside, 0u);
+  EXPECT_EQ(result.triangles_touching, 1u);
+  EXPECT_EQ(result.triangles_unproved, 1u);
+  EXPECT_FALSE(result.contained());
+  // The same triangle in the undented cube is held.
+  EXPECT_TRUE(check_containment(testing::unit_cube(), contents).contained());
+}
+
+// A degenerate mesh triangle (three collinear corners) is the segment between its outer
+// corners: here both ends lie in two far cubes and the segment runs through the gap.
+TEST(CheckContainment, DegenerateTrianglePokingOutIsCaught) {
+  const TriangleMesh two = merged(testing::unit_cube(), transformed(testing::unit_cube(), 1, {3, 0, 0}));
+  TriangleMesh needle;
+  needle.positions = {{0.5, 0.5, 0.5}, {3.5, 0.5, 0.5}, {0.6, 0.5, 0.5}};
+  needle.triangles = {{0, 1, 2}};
+  const Containment result = check_containment(two, needle);
+  EXPECT_EQ(result.vertices_outside, 0u);
+  EXPECT_EQ(result.triangles_touching, 1u);
+  EXPECT_FALSE(result.contained());
+  // A degenerate triangle with repeated corners inside one cube is a segment inside it.
+  TriangleMesh short_needle;
+  short_needle.positions = {{0.2, 0.5, 0.5}, {0.8, 0.5, 0.5}};
+  short_needle.triangles = {{0, 1, 1}};
+  EXPECT_TRUE(check_containment(two, short_needle).contained());
+  EXPECT_EQ(find_crossing_triangles(two, needle).size(), 4u);  // the segment leaves and enters through two faces each
+}
+
+// Many small convex parts (one box per component) holding as many small meshes that each
+// touch their box: every touching triangle is proved in its own part, without locating
+// every vertex in every part.
+TEST(CheckContainment, TenThousandConvexPartsEachHoldTheirComponent) {
+  TriangleMesh boxes, contents;
+  for (int i = 0; i < 10000; ++i) {
+    const Vertex offset(2.0 * (i % 100), 2.0 * (i / 100), 0);
+    append_mesh(boxes, transformed(testing::unit_cube(), 1, offset));
+    append_mesh(contents, transformed(testing::tetrahedron(), 0.9, offset));  // its corners lie on the cube's faces
+  }
+  const Containment result = check_containment(boxes, contents);
+  EXPECT_TRUE(result.contained());
+  EXPECT_EQ(result.triangles_touching, 40000u);
+  EXPECT_EQ(result.triangles_in_convex_parts, 40000u);
+  // One tetrahedron grown so that a corner leaves its box.
+  TriangleMesh grown = contents;
+  for (VertexIndex v = 0; v < 4; ++v) grown.positions[v] *= 1.2;
+  EXPECT_EQ(check_containment(boxes, grown).vertices_outside, 3u);
+}
+
+TEST(LocatePoints, CoordinatesTooLargeToSquareAreRefused) {
+  TriangleMesh huge = testing::unit_cube();
+  for (Vertex& p : huge.positions) p *= 1e300;
+  const std::vector<Vertex> points = {{0.5e300, 0.5e300, 0.5e300}};
+  EXPECT_THROW(locate_points(huge, points), InvalidInputError);
+  const std::vector<Vertex> far_point = {{1e200, 0, 0}};
+  EXPECT_THROW(locate_points(testing::unit_cube(), far_point), InvalidInputError);
+  EXPECT_THROW(check_containment(testing::unit_cube(), huge), InvalidInputError);
+}
+
+TEST(SurfacesClearBy, TouchingCloseAndApartSurfaces) {
+  const TriangleMesh cube = testing::unit_cube();
+  EXPECT_FALSE(surfaces_clear_by(cube, cube, 0.0));  // they meet
+  const TriangleMesh apart = transformed(testing::unit_cube(), 1, {1.5, 0, 0});  // 0.5 apart
+  EXPECT_TRUE(surfaces_clear_by(cube, apart, 0.49));
+  EXPECT_FALSE(surfaces_clear_by(cube, apart, 0.51));
+  // Edge against edge: a cube turned 45 degrees about z whose vertical edge comes 0.25
+  // from the first cube's face x = 1 at mid-height.
+  TriangleMesh turned = testing::unit_cube();
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.25 * 3.14159265358979323846, Vertex::UnitZ()).toRotationMatrix();
+  for (Vertex& p : turned.positions) p = rotation * (p - Vertex(0.5, 0.5, 0.5)) + Vertex(1.25 + std::sqrt(0.5), 0.5, 0.5);
+  EXPECT_TRUE(surfaces_clear_by(cube, turned, 0.24));
+  EXPECT_FALSE(surfaces_clear_by(cube, turned, 0.26));
+  // A degenerate triangle (a segment) 0.1 above the top face.
+  TriangleMesh segment;
+  segment.positions = {{0.2, 0.5, 1.1}, {0.8, 0.5, 1.1}, {0.5, 0.5, 1.1}};
+  segment.triangles = {{0, 1, 2}};
+  EXPECT_TRUE(surfaces_clear_by(segment, cube, 0.09));
+  EXPECT_FALSE(surfaces_clear_by(segment, cube, 0.11));
 }
 
 TEST(ClosestDistance, FromPointsToACubeSurface) {

@@ -105,6 +105,44 @@ TEST(CheckSpheresInside, OpenOrEmptyMeshIsRejected) {
   EXPECT_THROW(check_spheres_inside(TriangleMesh{}, {&sphere, 1}), InvalidInputError);
 }
 
+// A ball that holds whole triangles without touching any: radius 0.9 about the cube's
+// centre holds the whole cube (its corners are 0.87 away), and its sphere meets no
+// triangle. Candidates found by the sphere alone would miss every one of them.
+TEST(CheckSpheresInside, BallHoldingWholeTrianglesFails) {
+  const TriangleMesh cube = testing::unit_cube();
+  EXPECT_FALSE(inside(cube, {{0.5, 0.5, 0.5}, 0.9}));
+  EXPECT_FALSE(inside(cube, {{0.5, 0.5, 0.5}, 0.6}));  // pokes through every face
+  // A cavity: a small inverted tetrahedron (a second component) inside the cube. A ball
+  // that swallows it holds points of winding number 0; one beside it is fine.
+  TriangleMesh hollow = testing::unit_cube();
+  TriangleMesh cavity = testing::tetrahedron();
+  for (Vertex& p : cavity.positions) p = 0.1 * p + Vertex(0.45, 0.45, 0.45);
+  for (Triangle& t : cavity.triangles) std::swap(t[1], t[2]);
+  append_mesh(hollow, cavity);
+  EXPECT_FALSE(inside(hollow, {{0.5, 0.5, 0.5}, 0.3}));
+  EXPECT_TRUE(inside(hollow, {{0.2, 0.2, 0.2}, 0.15}));
+  EXPECT_TRUE(inside(cube, {{0.5, 0.5, 0.5}, 0.3}));
+}
+
+// Closed but self-intersecting: two overlapping cubes as one mesh. The solid is where the
+// winding number is not zero (1 in each cube, 2 in the overlap): balls inside it pass, a
+// ball through an inner surface fails (conservative: it crosses a triangle).
+TEST(CheckSpheresInside, SelfIntersectingClosedMeshByWindingNumber) {
+  TriangleMesh two = testing::unit_cube();
+  TriangleMesh shifted = testing::unit_cube();
+  for (Vertex& p : shifted.positions) p += Vertex(0.5, 0.5, 0.5);
+  append_mesh(two, shifted);
+  EXPECT_TRUE(inside(two, {{0.75, 0.75, 0.75}, 0.2}));  // in the overlap
+  EXPECT_TRUE(inside(two, {{1.25, 1.25, 1.25}, 0.2}));  // in the second cube only
+  EXPECT_FALSE(inside(two, {{0.75, 0.75, 0.75}, 0.3}));  // crosses inner faces
+  EXPECT_FALSE(inside(two, {{1.7, 0.3, 0.3}, 0.1}));     // outside both
+  // Degenerate triangles (zero area) bound nothing: a sliver through the ball does not fail it.
+  TriangleMesh with_sliver = testing::unit_cube();
+  with_sliver.positions.push_back({0.5, 0.5, 0.5});
+  with_sliver.triangles.push_back({8, 8, 8});
+  EXPECT_TRUE(inside(with_sliver, {{0.5, 0.5, 0.5}, 0.4}));
+}
+
 // On a real mesh: balls at random inside points with radius just below / above the
 // closest distance (CGAL's AABB tree, independent of the check's own distance filter).
 TEST(CheckSpheresInside, KnotBallsBelowAndAboveTheClosestDistance) {
