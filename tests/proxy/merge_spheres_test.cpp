@@ -100,6 +100,30 @@ TEST(MergeSpheres, HeldSpheresVanishFirstUnderD2) {
   EXPECT_EQ(sorted(levels[0]), sorted({spheres[0], spheres[4]}));
 }
 
+// One huge ball holding 20 000 small ones: each is absorbed without changing it, so no
+// merge may send the others searching again (that made the merging quadratic: 2e8 queue
+// entries here). The work counted must stay linear in the number of spheres.
+TEST(MergeSpheres, OneHugeSphereAmongManySmallOnesStaysLinear) {
+  constexpr std::size_t small = 20000;
+  Random random(17);
+  std::vector<Sphere> spheres = {{{0, 0, 0}, 1000}};
+  for (std::size_t i = 0; i < small; ++i)
+    spheres.push_back({Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5) * 100.0,
+                       0.01 + 0.1 * random.uniform()});
+  MergeSpheresStatistics statistics;
+  const auto levels = merge_spheres(spheres, std::vector<std::size_t>{1000, 1}, {}, &statistics);
+  EXPECT_EQ(levels[1], std::vector<Sphere>{spheres[0]});  // the huge one, unchanged
+  EXPECT_EQ(levels[0].size(), 1000u);
+  EXPECT_LE(statistics.queue_entries, 3 * spheres.size()) << statistics.queue_entries;
+  EXPECT_LE(statistics.queue_pops, 3 * spheres.size());
+  EXPECT_LE(statistics.partner_searches, 3 * spheres.size());
+  EXPECT_GE(statistics.partner_searches, spheres.size());  // the first search of every sphere
+  // The same holds under D1, where small pairs merge among themselves first.
+  MergeSpheresStatistics d1;
+  merge_spheres(spheres, std::vector<std::size_t>{1}, {.pair_distance = PairDistance::d1}, &d1);
+  EXPECT_LE(d1.queue_entries, 4 * spheres.size()) << d1.queue_entries;
+}
+
 TEST(MergeSpheres, BadTargetsAndSpheresAreRejected) {
   const std::vector<Sphere> spheres = random_spheres(10, 1);
   EXPECT_THROW(merge_spheres(spheres, std::vector<std::size_t>{0}), InvalidInputError);
