@@ -84,11 +84,11 @@ void add_build_command(CLI::App& app, int& exit_code) {
                       "Proxy to build (repeatable). aabb, obb, hull, hull:N (convex, at most N faces), wrap, "
                       "wrap:alpha=A,offset=O (relative to the bbox diagonal; defaults 0.05 and 1/600), outer:N "
                       "(non-convex outside mesh, at most N triangles), quadric:N (at most N triangles), cluster:F "
-                      "(cell F x largest bbox extent), inside:N (N spheres inscribed in a watertight mesh), "
+                      "(cell F x largest bbox extent), inside:N (N spheres inscribed in a closed mesh: every edge used as often in each direction), "
                       "spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S] (circumsphere set merged to "
                       "N spheres keeping the GSSA; one proxy per level). Default: aabb obb hull hull:32 wrap outer:512 "
                       "quadric:512 cluster:0.03 inside:40 spheres:100 (inside:40 is left out, with a note, when the "
-                      "mesh is not watertight)");
+                      "mesh is not closed)");
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
   const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
@@ -132,7 +132,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
                        .on_start = {},
                        .tets = options->tets,
                        .gssa_lines = options->gssa_lines,
-                       .skip_inside_unless_watertight = options->proxies.empty(),
+                       .skip_inside_unless_closed = options->proxies.empty(),
                        .on_skip = [](std::string_view name, std::string_view reason) {
                          std::cerr << "visproxy build: skipping " << name << ": " << reason << "\n";
                        }};

@@ -75,6 +75,9 @@ void print_report(const InfoOptions& options, MeshFormat format, double read_sec
     verdict.pop_back();
   }
   row("watertight", verdict);
+  row("bounds a solid", topology.unbalanced_edges == 0 && report.triangles > 0
+                            ? std::string("yes (every edge used as often in each direction; inside proxies need this)")
+                            : "no: " + count(topology.unbalanced_edges) + " edges used unequally often in their two directions");
   std::printf("  %-22s %.3f s\n", "inspected in", report.seconds);
 }
 
@@ -84,7 +87,8 @@ void add_info_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* command = app.add_subcommand(
       "info", "Validate a mesh: counts, bounds, components, boundary and non-manifold edges and vertices, "
-              "orientation, degenerate triangles, self-intersections, area, volume, and a watertight verdict.");
+              "orientation, degenerate triangles, self-intersections, area, volume, a watertight verdict, and whether it bounds "
+              "a solid (closed: every edge used as often in each direction, which inside proxies need).");
   command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl)")->required();
   command->add_flag("--json", options->json, "Print one JSON object (schema: data/schemas/info.schema.json)");
   const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};

@@ -67,6 +67,8 @@ nlohmann::json to_json(const MeshReport& report) {
       {"area", report.area},
       {"volume", optional(report.volume)},
       {"watertight", report.watertight()},
+      {"unbalanced_edges", topology.unbalanced_edges},
+      {"bounds_solid", topology.unbalanced_edges == 0 && report.triangles > 0},
       {"inspect_seconds", report.seconds},
   };
   json["first_self_intersection"] =

@@ -153,7 +153,7 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
       const InscribedSpheresOptions defaults;
       return {{"spheres", spec.count},
               {"margin_relative", defaults.margin_relative},
-              {"margin_world", defaults.margin_relative * diagonal},
+              {"margin_world", inscribed_sphere_margin(bounds, defaults.margin_relative)},
               {"volume_samples", defaults.volume_samples},
               {"coverage_samples", defaults.coverage_samples}};
     }
@@ -310,10 +310,10 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   for (const ProxySpec& spec : specs) {
     if (spec.method == ProxyMethod::inscribed_spheres || spec.method == ProxyMethod::sphere_set) {
       if (options.on_start) options.on_start(spec.name());
-      if (spec.method == ProxyMethod::inscribed_spheres && options.skip_inside_unless_watertight) {
-        if (const std::optional<std::string> defects = watertight_defects(inspect_mesh(mesh))) {
+      if (spec.method == ProxyMethod::inscribed_spheres && options.skip_inside_unless_closed) {
+        if (const std::optional<std::string> defects = closed_defects(mesh)) {
           if (options.on_skip)
-            options.on_skip(spec.name(), "the mesh is not watertight (" + *defects + "): an inside proxy needs one");
+            options.on_skip(spec.name(), "the mesh is not closed (" + *defects + "): an inside proxy needs a closed mesh");
           continue;
         }
       }

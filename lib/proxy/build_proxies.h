@@ -50,15 +50,15 @@ struct BuildOptions {
   InnerTetrahedra tets = InnerTetrahedra::normals;
   /// Isotropic lines (seeded by `seed`) for the GSSA ratio of sphere proxies.
   std::size_t gssa_lines = 100000;
-  /// When the mesh is not watertight, leave out inside:N (calling on_skip with its name and
-  /// the reason) instead of failing: for the default set, which holds inside:40.
-  bool skip_inside_unless_watertight = false;
+  /// When the mesh is not closed, leave out inside:N (calling on_skip with its name and the
+  /// reason) instead of failing: for the default set, which holds inside:40.
+  bool skip_inside_unless_closed = false;
   std::function<void(std::string_view name, std::string_view reason)> on_skip = {};
 };
 
 /// Builds every spec for `mesh`, in order (a spheres spec gives one proxy per level).
 /// `source` names the mesh in error messages: input a builder cannot handle (no
-/// triangles, collinear vertices, not watertight for inside:N, ...) throws
+/// triangles, collinear vertices, not closed for inside:N, ...) throws
 /// InvalidInputError("SOURCE", "SPEC: problem"). Sphere proxies' results hold the GSSA
 /// ratio of the set to the mesh over options.gssa_lines isotropic lines (95 % interval).
 std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::filesystem::path& source,

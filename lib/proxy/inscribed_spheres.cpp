@@ -205,15 +205,24 @@ std::vector<Sphere> drop_nearly_held(std::vector<Sphere> balls, const BoundingBo
 
 }  // namespace
 
+double inscribed_sphere_margin(const BoundingBox& bounds, double margin_relative) {
+  if (margin_relative == 0 || bounds.empty()) return 0;
+  const double magnitude = std::max(bounds.min.cwiseAbs().maxCoeff(), bounds.max.cwiseAbs().maxCoeff());
+  return margin_relative * bounds.diagonal() + 0x1.0p-22 * magnitude;
+}
+
 InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const InscribedSpheresOptions& options) {
   if (options.count == 0) throw InvalidInputError("", "an inside proxy needs at least one sphere");
-  const MeshReport report = require_watertight(
-      mesh, "an inside proxy must lie within the solid the surface bounds, and only a watertight surface bounds one");
+  require_closed(mesh,
+                 "an inside proxy must lie within the solid the surface bounds, {winding number != 0}, and only a "
+                 "closed surface (every edge used as often in each direction) bounds one");
   InscribedSpheres result;
-  result.mesh_volume = std::abs(report.volume.value_or(0.0));
+  const double volume = signed_volume(mesh);
+  result.mesh_volume = std::abs(volume);
   if (!(result.mesh_volume > 0)) throw InvalidInputError("", "the mesh encloses no volume: nothing fits inside it");
-  const double diagonal = report.bounds.diagonal();
-  const double outward = report.outward_oriented.value_or(true) ? 1.0 : -1.0;
+  const BoundingBox bounds = bounding_box(mesh);
+  const double diagonal = bounds.diagonal();
+  const double outward = volume > 0 ? 1.0 : -1.0;
 
   // Candidate centres: the inner pole of each surface sample.
   result.surface_samples = options.surface_samples > 0
@@ -240,9 +249,9 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
   for (const std::uint32_t c : pole) {
     if (c == kNoPole) continue;
     const Vertex& center = cells[c].circumsphere.center;
-    if ((center.array() <= report.bounds.min.array()).any() || (center.array() >= report.bounds.max.array()).any())
+    if ((center.array() <= bounds.min.array()).any() || (center.array() >= bounds.max.array()).any())
       continue;  // outside the box, so outside the mesh
-    const Vertex grid = (center - report.bounds.min) / cell;
+    const Vertex grid = (center - bounds.min) / cell;
     keyed.push_back({{static_cast<std::int64_t>(grid.x()), static_cast<std::int64_t>(grid.y()),
                       static_cast<std::int64_t>(grid.z())},
                      c});
@@ -259,7 +268,7 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
   std::vector<Vertex> centers;
   for (const std::uint32_t c : thinned) centers.push_back(cells[c].circumsphere.center);
   const std::vector<PointLocation> locations = locate_points(mesh, centers);
-  const double margin = options.margin_relative * diagonal;
+  const double margin = inscribed_sphere_margin(bounds, options.margin_relative);
   // Until measured, a candidate's radius is its circumradius (the sphere through four
   // samples), an estimate of its distance to the surface.
   std::vector<Sphere> candidates;
@@ -267,7 +276,7 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
     if (locations[i] == PointLocation::inside) candidates.push_back(cells[thinned[i]].circumsphere);
   result.candidates = candidates.size();
   if (candidates.size() > options.count) {
-    std::vector<Sphere> spread = drop_nearly_held(candidates, report.bounds, 0.25);
+    std::vector<Sphere> spread = drop_nearly_held(candidates, bounds, 0.25);
     if (spread.size() >= options.count) candidates = std::move(spread);
   }
   if (candidates.size() < options.count)

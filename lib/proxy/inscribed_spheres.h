@@ -1,5 +1,5 @@
 #pragma once
-// Inside proxies made of spheres: maximal balls inscribed in a watertight mesh, centred on
+// Inside proxies made of spheres: maximal balls inscribed in a closed mesh, centred on
 // (an approximation of) its medial axis, chosen to cover as much of its volume as possible.
 
 #include <cstddef>
@@ -20,9 +20,11 @@ struct InscribedSpheresOptions {
   /// Points spread uniformly over the union of the candidate balls; the greedy choice
   /// maximises the share of them covered.
   std::size_t volume_samples = 20000;
-  /// Each radius is the distance from its centre to the surface minus this fraction of the
-  /// bounding-box diagonal, so that ray tracers rounding to float never see a sphere poke
-  /// through the surface. 0 makes the spheres touch the surface (up to rounding).
+  /// Each radius is the distance from its centre to the surface minus a margin: this
+  /// fraction of the bounding-box diagonal plus 2 float ulps of the largest coordinate
+  /// (inscribed_sphere_margin), so that a ray tracer holding the mesh and the spheres in
+  /// float in the mesh's own coordinates does not see a sphere poke through the surface.
+  /// 0 makes the spheres touch the surface (up to rounding).
   double margin_relative = 1e-6;
   /// Uniform points in the spheres' bounding box for reporting the covered volume.
   std::size_t coverage_samples = 1'000'000;
@@ -33,7 +35,9 @@ struct InscribedSpheres {
   std::vector<Sphere> spheres;  ///< in the order chosen (most volume first)
   std::size_t surface_samples = 0;
   std::size_t candidates = 0;  ///< inner poles kept (one per grid cell) with their centre strictly inside
-  double mesh_volume = 0;      ///< enclosed volume of the mesh (divergence theorem), units cubed
+  /// Enclosed volume of the mesh (divergence theorem: the integral of the winding number,
+  /// which counts twice where parts of a self-intersecting mesh overlap), units cubed.
+  double mesh_volume = 0;
   /// Fraction of the mesh's volume inside the union of the spheres: Monte Carlo with
   /// `coverage_samples` uniform points in the spheres' bounding box (box_volume), the
   /// 95 % Wilson interval of that count scaled by box_volume / mesh_volume.
@@ -46,6 +50,11 @@ struct InscribedSpheres {
   /// Spheres whose rounded radius had to be shrunk (by a few ulps) to pass the exact check.
   std::size_t spheres_shrunk = 0;
 };
+
+/// The margin by which build_inscribed_spheres keeps each sphere off the surface of a mesh
+/// with these bounds: margin_relative x diagonal + 2^-22 x the largest coordinate magnitude
+/// (0 when margin_relative is 0). Mesh units.
+double inscribed_sphere_margin(const BoundingBox& bounds, double margin_relative);
 
 /// N balls inside the solid bounded by `mesh`, each proved inside by check_spheres_inside
 /// (exact: centre strictly inside, radius^2 at most the squared distance to every triangle).
@@ -62,10 +71,13 @@ struct InscribedSpheres {
 /// circumradius until it first tops the queue; then it is measured: distance to the surface
 /// (CGAL AABB tree) minus the margin. Deterministic for a seed.
 ///
-/// Throws InvalidInputError (empty file name) naming the defects when the mesh is not
-/// watertight (boundary edges, non-manifold edges or vertices, inconsistent orientation,
-/// self-intersections, degenerate triangles) and saying why an inside proxy needs one; and
-/// when fewer than N candidates exist (asking for at most that many).
+/// The mesh must be closed (every edge used as often in each direction): its solid is
+/// {winding number != 0}, which is well defined even where the surface self-intersects or
+/// has non-manifold edges (CGAL's camel and cow do), and a segment from outside to a ball
+/// inside it must cross the surface. Throws InvalidInputError (empty file name) naming the
+/// defects (boundary edges, inconsistent orientation) when it is not, and saying why an
+/// inside proxy needs a closed mesh; and when fewer than N candidates exist (asking for at
+/// most that many).
 InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const InscribedSpheresOptions& options = {});
 
 }  // namespace visproxy

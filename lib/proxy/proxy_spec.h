@@ -10,7 +10,7 @@
 //   outer:N              non-convex outside mesh, at most N triangles (outside)
 //   quadric:N            quadric edge collapse to at most N triangles (general)
 //   cluster:F            vertex clustering, cell F x largest bbox extent (general)
-//   inside:N             N maximal spheres inscribed in a watertight mesh (inside)
+//   inside:N             N maximal spheres inscribed in a closed mesh (inside)
 //   spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S]
 //                        Delaunay circumsphere set merged to N (and N2, ...) spheres, all
 //                        levels in one pass, one proxy each named spheres-N (general).

@@ -109,7 +109,7 @@ TEST_F(CliBuild, BadSpecOrBadMeshFailsWithOneLineAndWritesNothing) {
       {"'" + knot + "' -o '" + out.string() + "' --proxy spheres:100,25 --proxy spheres:25", "asked for twice"},
       {"'" + knot + "' -o '" + out.string() + "' --proxy spheres:100 --tets voronoi", "--tets"},
       {"'" + testing::cgal_mesh("elephant-with-holes.off").string() + "' -o '" + out.string() + "' --proxy inside:40",
-       "inside:40: the mesh is not watertight (1353 boundary edges"},
+       "inside:40: the mesh is not closed (1353 boundary edges)"},
       {"'" + testing::cgal_mesh("elephant-with-holes.off").string() + "' -o '" + out.string() +
            "' --proxy spheres:100 --tets tetgen",
        "--tets normals"},
@@ -194,8 +194,8 @@ TEST_F(CliBuild, DefaultSetOnAMeshWithHolesLeavesOutInsideWithOneNote) {
                                             folder_.string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(result.err,
-            "visproxy build: skipping inside-40: the mesh is not watertight (1353 boundary edges, 173 "
-            "self-intersecting triangle pairs): an inside proxy needs one\n");
+            "visproxy build: skipping inside-40: the mesh is not closed (1353 boundary edges): an inside proxy "
+            "needs a closed mesh\n");
   EXPECT_NE(result.out.find("9 proxies of"), std::string::npos) << result.out;
   const json manifest = json::parse(read_file(folder_ / "manifest.json"));
   for (const json& entry : manifest.at("proxies")) EXPECT_NE(entry.at("name"), "inside-40");
