@@ -96,14 +96,19 @@ json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& fold
     }
     return placed;
   };
-  const RayScene mesh_scene(placements.size() == 1 && options.scene.empty() ? mesh : place_mesh(mesh));
+  const TriangleMesh placed_mesh = placements.size() == 1 && options.scene.empty() ? mesh : place_mesh(mesh);
+  // Mesh and proxies are traced relative to the placed mesh's centre: float rounding then
+  // follows its extent, not its distance from the origin.
+  const BoundingBox placed_box = bounding_box(placed_mesh);
+  const Vertex center = placed_box.empty() ? Vertex::Zero() : Vertex(0.5 * (placed_box.min + placed_box.max));
+  const RayScene mesh_scene(placed_mesh, center);
   const ReferenceRays reference = trace_reference(mesh_scene, std::move(segments), options.timing);
   for (json& entry : manifest.at("proxies")) {
     if (options.on_start) options.on_start(entry.at("name").get<std::string>());
     const auto start = std::chrono::steady_clock::now();
     const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
-    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(place_spheres(geometry.spheres))
-                                                                        : RayScene(place_mesh(geometry.mesh));
+    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(place_spheres(geometry.spheres), center)
+                                                                        : RayScene(place_mesh(geometry.mesh), center);
     json measured = measurement_json(measure_proxy(reference, proxy_scene, entry_kind(entry), options.timing));
     measured["rays"] = rays;
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

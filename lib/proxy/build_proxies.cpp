@@ -286,11 +286,11 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   std::optional<ReferenceRays> reference;
   auto measure_gssa = [&](BuiltProxy& proxy) {
     if (!reference) {
-      const RayScene scene(mesh);
+      const RayScene scene(mesh, bounding_sphere(mesh).center);
       reference = trace_reference(scene, isotropic_lines(bounding_sphere(mesh), options.gssa_lines, options.seed),
                                   {.rays = 0, .repeats = 0});
     }
-    const RayScene spheres(proxy.spheres);
+    const RayScene spheres(proxy.spheres, bounding_sphere(mesh).center);
     const std::vector<std::uint8_t> blocked = spheres.segments_blocked(reference->rays);
     RayTypeCounts counts;
     for (std::size_t i = 0; i < blocked.size(); ++i) counts.add(reference->mesh_blocked[i] != 0, blocked[i] != 0);

@@ -75,6 +75,22 @@ ConvexPolytope ConvexPolytope::transformed(const Eigen::Affine3d& transform) con
   return result;
 }
 
+ConvexPolytope ConvexPolytope::grown(double distance) const {
+  ConvexPolytope result = *this;
+  for (Plane& plane : result.planes_) plane.offset += distance;
+  // A vertex moves by the distance over the sine of the angles between its planes; the
+  // factor covers that for any sane mesh, as from_mesh's tolerance does.
+  result.radius_ += 1e3 * distance;
+  result.pack();
+  return result;
+}
+
+double ConvexPolytope::inner_distance(const Vertex& point) const {
+  double distance = std::numeric_limits<double>::infinity();
+  for (const Plane& plane : planes_) distance = std::min(distance, plane.offset - plane.normal.dot(point));
+  return distance;
+}
+
 void ConvexPolytope::pack() {
   const std::size_t blocks = (planes_.size() + 3) / 4;
   packed_.assign(16 * blocks, 0.0);

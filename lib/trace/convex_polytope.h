@@ -31,6 +31,14 @@ class ConvexPolytope {
   /// The image of the polytope under an affine map (planes mapped exactly, renormalised).
   ConvexPolytope transformed(const Eigen::Affine3d& transform) const;
 
+  /// The polytope with every plane pushed out by `distance` (world units), and its
+  /// bounding ball grown to hold the result: for rounding bounds of the tests that use it.
+  ConvexPolytope grown(double distance) const;
+
+  /// The smallest distance from `point` (inside) to a face plane: the radius of the
+  /// largest ball about it that the polytope holds. Negative when the point is outside.
+  double inner_distance(const Vertex& point) const;
+
   /// Whether the closed segment from `from` to `to` meets the solid.
   bool meets_segment(const Vertex& from, const Vertex& to) const;
 

@@ -13,6 +13,7 @@ struct RayScene::Impl {
   EmbreeDevice device;
   RTCScene scene = nullptr;
   std::vector<Sphere> spheres;  // user geometry data: must outlive the scene
+  Vertex origin = Vertex::Zero();
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -30,14 +31,25 @@ void RayScene::commit() {
   impl_->device.throw_if_failed();
 }
 
-RayScene::RayScene(std::span<const Sphere> spheres) : impl_(make_impl()) {
+RayScene::RayScene(std::span<const Sphere> spheres, const Vertex& origin) : impl_(make_impl()) {
+  impl_->origin = origin;
   impl_->spheres.assign(spheres.begin(), spheres.end());
+  for (Sphere& sphere : impl_->spheres) sphere.center -= origin;
   if (!spheres.empty()) attach_spheres(impl_->device, impl_->scene, impl_->spheres);
   commit();
 }
 
-RayScene::RayScene(const TriangleMesh& mesh) : impl_(make_impl()) {
-  if (!mesh.triangles.empty()) attach_triangles(impl_->device, impl_->scene, mesh);
+RayScene::RayScene(const TriangleMesh& mesh, const Vertex& origin) : impl_(make_impl()) {
+  impl_->origin = origin;
+  if (!mesh.triangles.empty()) {
+    if (origin == Vertex::Zero()) {
+      attach_triangles(impl_->device, impl_->scene, mesh);
+    } else {
+      TriangleMesh local = mesh;
+      for (Vertex& p : local.positions) p -= origin;
+      attach_triangles(impl_->device, impl_->scene, local);
+    }
+  }
   commit();
 }
 
@@ -46,7 +58,7 @@ RayScene::~RayScene() = default;
 bool RayScene::segment_blocked(const Segment& segment) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRay ray = segment_ray(segment.from, segment.to);
+  RTCRay ray = segment_ray(segment.from - impl_->origin, segment.to - impl_->origin);
   rtcOccluded1(impl_->scene, &context, &ray);
   return ray.tfar == -std::numeric_limits<float>::infinity();
 }

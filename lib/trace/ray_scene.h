@@ -24,12 +24,16 @@ struct Segment {
 /// construction, robust traversal so that rays do not slip through shared edges).
 /// Queries are const and may run from many threads at once. Embree errors, including
 /// running out of memory, are thrown as visproxy::Error.
+///
+/// Everything is handed to Embree relative to `origin` (vertices, balls, segments), so that
+/// float rounding is relative to the distance from it rather than from (0, 0, 0): give the
+/// centre of what is traced, and the same origin to scenes whose answers are compared.
 class RayScene {
  public:
-  explicit RayScene(const TriangleMesh& mesh);
+  explicit RayScene(const TriangleMesh& mesh, const Vertex& origin = Vertex::Zero());
   /// Solid balls: a segment is blocked when it meets any ball, including when it starts or
   /// ends inside one (unlike Embree's sphere points, which skip those hits).
-  explicit RayScene(std::span<const Sphere> spheres);
+  explicit RayScene(std::span<const Sphere> spheres, const Vertex& origin = Vertex::Zero());
   ~RayScene();
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
