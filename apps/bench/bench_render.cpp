@@ -81,7 +81,7 @@ int run(int argc, char** argv) {
     std::printf("  run %d: exact %.3f s, bounds %.3f s, bounds / exact %.3f\n", r + 1, a.stats.seconds, b.stats.seconds,
                 ratios.back());
   }
-  const RenderWorld counting(scene, proxies, true);
+  const RenderWorld counting(scene, proxies, {.counting = true});
   RenderOptions counted_exact = exact, counted_bounds = bounds;
   counted_exact.spp = counted_bounds.spp = std::min(spp, 4);
   const RenderStats ce = render(scene, counting, counted_exact).stats, cb = render(scene, counting, counted_bounds).stats;

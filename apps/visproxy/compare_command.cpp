@@ -168,6 +168,11 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                                     .seed = o->seed,
                                     .on_proxy = [](std::string_view mesh, std::string_view spec, bool cached) {
                                       if (!cached) std::cerr << "visproxy compare: building " << spec << " of " << mesh << "\n";
+                                    },
+                                    .on_verify = [](std::string_view mesh, std::string_view spec, bool holds, std::string_view counterexample) {
+                                      std::cerr << "visproxy compare: verified " << spec << " of " << mesh << ": "
+                                                << (holds ? std::string("holds") : "does not hold (" + std::string(counterexample) + "): used as a general proxy")
+                                                << "\n";
                                     }};
     const std::vector<std::string> specs = stochastic_specs(scene, *o);
     const std::vector<Mode> all_modes = modes(specs, *o);
@@ -182,7 +187,8 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       proxy_options.stochastic_spec = spec.empty() ? std::nullopt : std::optional<std::string>(spec);
       const std::vector<MeshProxies> proxies = prepare_scene_proxies(scene, proxy_options);
       world = std::make_unique<RenderWorld>(scene, proxies);
-      if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, true);
+      for (const std::string& note : world->notes()) std::cerr << "visproxy compare: note: " << note << "\n";
+      if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, RenderWorldOptions{.counting = true});
       world_spec = spec;
     };
     use_world("");

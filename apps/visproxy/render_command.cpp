@@ -88,8 +88,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
   command->add_flag("--no-split", o->no_split, "stochastic: estimate the shading point's own instance too, instead of tracing it exactly");
   command->add_option("--probe-rays", o->probe_rays, "adaptive: probe rays per shading point (K) [default: 16]")->check(CLI::Range(1, 4096));
   command->add_option("--probability-floor", o->probability_floor,
-                      "adaptive: least probability of each term the proxy kind needs, which keeps the estimate unbiased "
-                      "when the probes miss a ray type [default: 0.05]")
+                      "adaptive or learned: least probability of each term the proxy kind needs, which keeps the estimate "
+                      "unbiased when the probes or corrections miss a ray type; must be above 0 [default: 0.05]")
       ->check(CLI::Range(0.0, 0.33));
   command->add_option("--correction-scale", o->correction_scale,
                       "control-variate, adaptive or learned: trace the mesh with probability min(1, scale x sqrt(p)) where "
@@ -130,10 +130,16 @@ void add_render_command(CLI::App& app, int& exit_code) {
       if (!cached) std::cerr << "visproxy render: building " << spec << " of " << mesh << " (cached in "
                              << proxy_options.cache.string() << ")\n";
     };
+    proxy_options.on_verify = [](std::string_view mesh, std::string_view spec, bool holds, std::string_view counterexample) {
+      std::cerr << "visproxy render: verified " << spec << " of " << mesh << ": "
+                << (holds ? std::string("holds") : "does not hold (" + std::string(counterexample) + "): used as a general proxy")
+                << "\n";
+    };
     const std::vector<MeshProxies> proxies = o->visibility == VisibilityMode::exact
                                                  ? std::vector<MeshProxies>(scene.instances.size())
                                                  : prepare_scene_proxies(scene, proxy_options);
-    const RenderWorld world(scene, proxies, o->count);
+    const RenderWorld world(scene, proxies, {.counting = o->count});
+    for (const std::string& note : world.notes()) std::cerr << "visproxy render: note: " << note << "\n";
     RenderOptions options{.visibility = o->visibility,
                           .probabilities = o->probabilities,
                           .estimator = o->estimator,
@@ -177,7 +183,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
       instances.push_back({{"mesh", scene.instances[i].mesh},
                            {"stochastic_proxy", proxies[i].stochastic ? nlohmann::json(proxies[i].stochastic->spec) : nlohmann::json(nullptr)},
                            {"outside_proxy", proxies[i].outside ? nlohmann::json(proxies[i].outside->spec) : nlohmann::json(nullptr)},
-                           {"inside_proxy", proxies[i].inside ? nlohmann::json(proxies[i].inside->spec) : nlohmann::json(nullptr)}});
+                           {"inside_proxy", proxies[i].inside ? nlohmann::json(proxies[i].inside->spec) : nlohmann::json(nullptr)},
+                           {"stochastic_proxy_proved", proxies[i].stochastic && proxies[i].stochastic->proved}});
     const nlohmann::json document = {
         {"scene", o->scene.string()},
         {"image", o->output.string()},
@@ -197,6 +204,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"seed", o->seed},
         {"seconds_budget", o->seconds},
         {"instances", instances},
+        {"proxy_notes", world.notes()},
         {"stats", result.stats.to_json()}};
     write_file_atomically(stats, document.dump(2) + "\n");
     std::printf("visproxy render: %s, %dx%d, %s visibility, %d spp x %d shadow rays, seed %llu: %.2f s, %llu shadow rays "

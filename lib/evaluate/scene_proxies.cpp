@@ -6,6 +6,7 @@
 
 #include "core/errors.h"
 #include "evaluate/proxy_folder.h"
+#include "evaluate/verify_proxy.h"
 #include "mesh/mesh_topology.h"
 #include "proxy/build_proxies.h"
 #include "proxy/manifest.h"
@@ -13,29 +14,41 @@
 namespace visproxy {
 namespace {
 
-// FNV-1a over the mesh's coordinates and indices: the cache key of a mesh's content.
-std::string content_hash(const TriangleMesh& mesh) {
-  std::uint64_t hash = 0xCBF29CE484222325ull;
-  auto mix = [&](const void* data, std::size_t size) {
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < size; ++i) hash = (hash ^ bytes[i]) * 0x100000001B3ull;
-  };
-  for (const Vertex& p : mesh.positions) mix(p.data(), 3 * sizeof(double));
-  for (const Triangle& t : mesh.triangles) mix(t.data(), sizeof(Triangle));
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
-  return text;
+// The proxy's kind is kept only when verify proves its claim for this mesh and these
+// files: a verdict recorded for them is used, otherwise the proxy is verified now (and, in
+// the cache, the verdict recorded).
+InstanceProxy prove(const SceneMesh& mesh, const std::filesystem::path& folder, nlohmann::json& manifest,
+                    nlohmann::json& entry, const ProxySpec& spec, bool record, const SceneProxyOptions& options) {
+  ProxyGeometry geometry = read_proxy_geometry(folder, entry);
+  const ProxyKind kind = entry_kind(entry);
+  bool proved = false;
+  if (kind != ProxyKind::general) {
+    if (entry.contains("verify") && verdict_proves(entry["verify"], mesh.mesh, geometry)) {
+      proved = true;
+    } else {
+      nlohmann::json verdict = verify_proxy(mesh.mesh, manifest, entry, geometry);
+      proved = verdict_proves(verdict, mesh.mesh, geometry);
+      if (options.on_verify) {
+        const nlohmann::json& counterexample = verdict["counterexample"];
+        options.on_verify(mesh.name, spec.text, proved, counterexample.is_string() ? counterexample.get<std::string>() : "");
+      }
+      if (record) {
+        entry["verify"] = std::move(verdict);
+        write_manifest(folder, manifest);
+      }
+    }
+  }
+  return {kind, spec.text, std::move(geometry.mesh), std::move(geometry.spheres), proved};
 }
 
 InstanceProxy load_or_build(const SceneMesh& mesh, const ProxySpec& spec, const SceneProxyOptions& options) {
-  // A proxy folder the scene names comes first.
+  // A proxy folder the scene names comes first; its verdicts are checked, never written.
   if (!mesh.proxy_folder.empty()) {
-    const nlohmann::json manifest = read_manifest(mesh.proxy_folder);
-    for (const nlohmann::json& entry : manifest.at("proxies"))
+    nlohmann::json manifest = read_manifest(mesh.proxy_folder);
+    for (nlohmann::json& entry : manifest.at("proxies"))
       if (entry.at("name") == spec.name()) {
         if (options.on_proxy) options.on_proxy(mesh.name, spec.text, true);
-        const ProxyGeometry geometry = read_proxy_geometry(mesh.proxy_folder, entry);
-        return {entry_kind(entry), spec.text, geometry.mesh, geometry.spheres};
+        return prove(mesh, mesh.proxy_folder, manifest, entry, spec, false, options);
       }
   }
   const std::filesystem::path folder =
@@ -58,11 +71,8 @@ InstanceProxy load_or_build(const SceneMesh& mesh, const ProxySpec& spec, const 
                                  .bounds = bounding_box(mesh.mesh)};
     manifest = write_proxy_folder(folder, described, built, build);
   }
-  for (const nlohmann::json& entry : manifest.at("proxies")) {
-    if (entry.at("name") != spec.name()) continue;
-    const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
-    return {entry_kind(entry), spec.text, geometry.mesh, geometry.spheres};
-  }
+  for (nlohmann::json& entry : manifest.at("proxies"))
+    if (entry.at("name") == spec.name()) return prove(mesh, folder, manifest, entry, spec, true, options);
   throw InvalidInputError(folder / "manifest.json", "does not list the proxy " + spec.name());
 }
 

@@ -1,21 +1,38 @@
 #include "render/render_world.h"
 
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 
 #include "core/errors.h"
 #include "trace/convex_polytope.h"
 #include "trace/embree_support.h"
+#include "verify/containment.h"
 
 namespace visproxy {
 namespace {
 
 // Instance i carries mask bit i % 31; lights carry bit 31. A query that skips or keeps one
 // instance clears or keeps its bit, so Embree never visits what it must ignore; only when
-// other instances share that bit (more than 31 instances) does the filter function decide.
+// other instances share that bit (more than 31 instances), or the device has no ray masks,
+// does the filter function decide.
 constexpr unsigned kLightMask = 1u << 31;
 constexpr unsigned kAllInstances = kLightMask - 1;
 unsigned instance_mask(std::size_t instance) { return 1u << (instance % 31); }
+
+// Embree holds vertices and rays in single precision (24-bit significands). The proofs
+// are made in double; these bounds, relative to the magnitude of the coordinates Embree
+// sees, cover the rounding of vertices and rays and the error of Embree's tests. Embree's
+// triangle test works on the vertices relative to the ray's origin, each rounded to float
+// and sheared: a vertex moves by about 3 ulps of |vertex| + |origin| (half an ulp for each
+// rounding). 2^-21 of a magnitude is 8 float ulps at it, both for the padding of each
+// proxy (so two surfaces proved apart stay apart by 16 ulps less 6) and for the offsets of
+// points off their surfaces.
+constexpr double kFloatPadding = 0x1.0p-21;
+constexpr double kSurfaceOffset = 0x1.0p-21;
 
 // For each triangle of a small mesh: whether every vertex lies behind its plane (against
 // the normal of its winding), and whether every vertex lies in front of it.
@@ -51,14 +68,19 @@ struct FilterContext {
   InstanceFilter filter;
 };
 
+bool filter_passes(std::size_t instance, const InstanceFilter& filter) {
+  return static_cast<int>(instance) != filter.skip && (filter.only < 0 || static_cast<int>(instance) == filter.only) &&
+         (filter.bits & instance_mask(instance)) != 0;
+}
+
+// Shadow queries: hits on lights (the only geometry outside an instance) and on instances
+// the filter drops are ignored.
 void instance_filter(const RTCFilterFunctionNArguments* args) {
   const auto* context = reinterpret_cast<const FilterContext*>(args->context);
   for (unsigned lane = 0; lane < args->N; ++lane) {
     if (args->valid[lane] == 0) continue;
-    const auto instance = static_cast<int>(RTCHitN_instID(args->hit, args->N, lane, 0));
-    if ((context->filter.skip >= 0 && instance == context->filter.skip) ||
-        (context->filter.only >= 0 && instance != context->filter.only))
-      args->valid[lane] = 0;
+    const unsigned instance = RTCHitN_instID(args->hit, args->N, lane, 0);
+    if (instance == RTC_INVALID_GEOMETRY_ID || !filter_passes(instance, context->filter)) args->valid[lane] = 0;
   }
 }
 
@@ -92,26 +114,50 @@ struct ConvexInstance {
   ConvexPolytope world;
 };
 
-bool filter_passes(std::size_t instance, const InstanceFilter& filter) {
-  return static_cast<int>(instance) != filter.skip && (filter.only < 0 || static_cast<int>(instance) == filter.only) &&
-         (filter.bits & instance_mask(instance)) != 0;
+double largest_magnitude(const BoundingBox& box, const Vertex& center) {
+  return box.empty() ? 0.0 : std::max((box.max - center).cwiseAbs().maxCoeff(), (box.min - center).cwiseAbs().maxCoeff());
 }
+
+TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
+  TriangleMesh result = mesh;
+  for (Vertex& p : result.positions) p = transform * p;
+  return result;
+}
+
+std::string kind_text(ProxyKind kind) {
+  return kind == ProxyKind::outside ? "outside" : kind == ProxyKind::inside ? "inside" : "general";
+}
+
+// One proxy of one mesh, made ready for the world: the geometry that is traced or
+// clipped, in the mesh's frame, and the kind it can still claim after the proof and the
+// rounding checks.
+struct PreparedProxy {
+  ProxyKind kind = ProxyKind::general;
+  std::string spec;
+  std::optional<ConvexPolytope> polytope;  ///< closed convex, at most 64 planes: clipped
+  TriangleMesh mesh;                       ///< traced by Embree (unless polytope or spheres)
+  std::vector<Sphere> spheres;
+  std::string note;  ///< why the kind was given up, if it was
+};
 
 }  // namespace
 
 struct RenderWorld::Impl {
   EmbreeDevice device;
   bool counting = false;
+  bool masks = true;
+  Vertex origin = Vertex::Zero();  // world points are handed to Embree relative to it
+  double scene_magnitude = 0;      // largest |coordinate - origin| of instances and lights
   std::map<RTCScene, std::unique_ptr<CountingBvh>> counting_bvhs;  // per object scene
   std::map<RTCScene, std::vector<std::optional<CountedInstance>>> counted;  // per top scene, per instance
   std::vector<RTCScene> owned;  // released at the end
-  std::vector<std::vector<Sphere>> sphere_storage;
+  std::vector<std::vector<Sphere>> sphere_storage;  // moved vectors keep their buffers
   RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
   std::vector<Eigen::Matrix3d> normal_matrices;  // per instance, object to world normals
   std::vector<int> light_of_triangle;
   std::vector<Vertex> light_normals;  // per light triangle, unit, world
+  TriangleMesh lights_world;          // every light triangle, world space
   std::vector<ProxyKind> stochastic_kinds;  // per instance; outside for exact (mesh itself)
-  std::vector<bool> has_outside;
   std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
   std::size_t instance_count = 0;
   bool has_inside = false;
@@ -122,25 +168,35 @@ struct RenderWorld::Impl {
   std::map<std::string, TangentSides> mesh_sides;
   std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
+  std::vector<std::string> notes;
 
   ~Impl() {
     for (RTCScene scene : owned) rtcReleaseScene(scene);
   }
 
-  RTCScene scene_of(const InstanceProxy& p) {
+  void note(const std::string& text) {
+    if (std::find(notes.begin(), notes.end(), text) == notes.end()) notes.push_back(text);
+  }
+
+  // An object scene of triangles or balls, given in the mesh's frame and stored relative
+  // to `center` (the mesh's own centre).
+  RTCScene object_scene(const TriangleMesh& mesh, const std::vector<Sphere>& spheres, const Vertex& center) {
     RTCScene scene = device.new_scene();
-    if (counting)
-      counting_bvhs.emplace(scene, p.spheres.empty() ? std::make_unique<CountingBvh>(p.mesh)
-                                                     : std::make_unique<CountingBvh>(std::span<const Sphere>(p.spheres)));
     owned.push_back(scene);
     // Hits inside instances go through the context filter too: Embree needs the flag on
     // the instanced scenes as well as on the top scenes.
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
-    if (!p.spheres.empty()) {
-      sphere_storage.push_back(p.spheres);
+    if (!spheres.empty()) {
+      std::vector<Sphere> local = spheres;
+      for (Sphere& s : local) s.center -= center;
+      sphere_storage.push_back(std::move(local));
       attach_spheres(device, scene, sphere_storage.back());
-    } else if (!p.mesh.triangles.empty()) {
-      attach_triangles(device, scene, p.mesh);
+      if (counting) counting_bvhs.emplace(scene, std::make_unique<CountingBvh>(std::span<const Sphere>(sphere_storage.back())));
+    } else {
+      TriangleMesh local = mesh;
+      for (Vertex& p : local.positions) p -= center;
+      if (!local.triangles.empty()) attach_triangles(device, scene, local);
+      if (counting) counting_bvhs.emplace(scene, std::make_unique<CountingBvh>(local));
     }
     rtcCommitScene(scene);
     device.throw_if_failed();
@@ -154,20 +210,23 @@ struct RenderWorld::Impl {
     return scene;
   }
 
-  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& transform, unsigned id, unsigned mask) {
+  // `object_to_world` maps the object scene's (centred) frame to world space; Embree gets
+  // it relative to the world's origin.
+  void add_instance(RTCScene top, RTCScene object, const Eigen::Affine3d& object_to_world, unsigned id, unsigned mask) {
     embree_masks[top] |= mask;
     if (counting) {
       auto& list = counted[top];
       list.resize(std::max<std::size_t>(list.size(), id + 1));
       const CountingBvh* bvh = counting_bvhs.at(object).get();
-      CountedInstance instance{bvh, transform.inverse(), {}};
+      CountedInstance instance{bvh, object_to_world.inverse(), {}};
       const BoundingBox& local = bvh->bounds();
       if (!local.empty())
         for (int corner = 0; corner < 8; ++corner)
-          instance.world.extend(transform * Vertex(corner & 1 ? local.max.x() : local.min.x(), corner & 2 ? local.max.y() : local.min.y(),
-                                                   corner & 4 ? local.max.z() : local.min.z()));
+          instance.world.extend(object_to_world * Vertex(corner & 1 ? local.max.x() : local.min.x(), corner & 2 ? local.max.y() : local.min.y(),
+                                                         corner & 4 ? local.max.z() : local.min.z()));
       list[id] = instance;
     }
+    const Eigen::Affine3d transform = Eigen::Translation3d(-origin) * object_to_world;
     RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
     device.throw_if_failed();
     rtcSetGeometryInstancedScene(geometry, object);
@@ -200,8 +259,8 @@ struct RenderWorld::Impl {
       }
     // No Embree call when every instance Embree holds here is filtered out (e.g. the only
     // instance without a convex proxy is the one the query skips).
-    const auto masks = embree_masks.find(scene);
-    if (masks == embree_masks.end() || (masks->second & query_mask(filter)) == 0) return false;
+    const auto masks_here = embree_masks.find(scene);
+    if (masks_here == embree_masks.end() || (masks_here->second & query_mask(filter)) == 0) return false;
     if (counting) {
       const auto it = counted.find(scene);
       if (it == counted.end()) return false;
@@ -218,91 +277,273 @@ struct RenderWorld::Impl {
     FilterContext context;
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
-    RTCRay ray = segment_ray(from, to);
+    RTCRay ray = segment_ray(from - origin, to - origin);
     ray.mask = query_mask(filter);
     const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
-    context.context.filter = shared_bit ? instance_filter : nullptr;
+    context.context.filter = shared_bit || !masks ? instance_filter : nullptr;
     rtcOccluded1(scene, &context.context, &ray);
     return ray.tfar == -std::numeric_limits<float>::infinity();
   }
+
+  // Whether every light lies outside the solid of `solid_world` (a closed mesh in world
+  // space) by more than `margin`: no light triangle comes within the margin of its surface,
+  // so each stays in one region of constant winding number, and every light vertex has
+  // winding number 0.
+  bool lights_outside(const TriangleMesh& solid_world, double margin) const {
+    if (lights_world.triangles.empty()) return true;
+    BoundingBox lights_box = bounding_box(lights_world), solid_box = bounding_box(solid_world);
+    if ((lights_box.max.array() + margin < solid_box.min.array()).any() ||
+        (lights_box.min.array() - margin > solid_box.max.array()).any())
+      return true;
+    if (!check_edge_balance(solid_world).balanced()) return false;
+    if (!surfaces_clear_by(lights_world, solid_world, margin)) return false;
+    const std::vector<PointLocation> locations = locate_points(solid_world, lights_world.positions);
+    return std::all_of(locations.begin(), locations.end(), [](PointLocation l) { return l == PointLocation::outside; });
+  }
 };
 
-RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, bool counting)
+namespace {
+
+// The stochastic, outside or inside use of a proxy (notes name it).
+PreparedProxy prepare_proxy(const InstanceProxy& p, const SceneMesh& mesh, double pad) {
+  PreparedProxy prepared;
+  prepared.spec = p.spec;
+  prepared.kind = p.proved ? p.kind : ProxyKind::general;
+  prepared.mesh = p.mesh;
+  prepared.spheres = p.spheres;
+  const std::string name = "proxy " + p.spec + " of mesh \"" + mesh.name + "\"";
+  if (!p.proved && p.kind != ProxyKind::general)
+    prepared.note = name + ": its " + kind_text(p.kind) + " claim is not proved for this mesh (visproxy verify): used as a general proxy";
+  if (!p.spheres.empty()) {
+    if (prepared.kind == ProxyKind::inside) {
+      // Shrunk by the rounding bound, so that the exact proof survives Embree's float rays.
+      std::erase_if(prepared.spheres, [&](const Sphere& s) { return s.radius <= pad; });
+      for (Sphere& s : prepared.spheres) s.radius -= pad;
+    } else if (prepared.kind == ProxyKind::outside) {
+      prepared.kind = ProxyKind::general;
+      prepared.note = name + ": outside sphere sets are not supported: used as a general proxy";
+    }
+    return prepared;
+  }
+  if (prepared.kind != ProxyKind::inside) prepared.polytope = ConvexPolytope::from_mesh(p.mesh);
+  if (prepared.polytope || prepared.kind == ProxyKind::general) return prepared;
+  if (prepared.kind == ProxyKind::outside) {
+    // Convex with many planes: scaled about its centre, which holds the whole proxy pushed
+    // out by `pad` (a convex body holding a ball of radius r about c holds, scaled by
+    // 1 + pad / r about c, every point within pad of it).
+    if (const std::optional<ConvexPolytope> many = ConvexPolytope::from_mesh(p.mesh, p.mesh.triangles.size())) {
+      const std::vector<Vertex> points = used_positions(p.mesh);
+      Vertex center = Vertex::Zero();
+      for (const Vertex& v : points) center += v / static_cast<double>(points.size());
+      const double inner = many->inner_distance(center);
+      if (inner > 0) {
+        const double scale = 1 + 2 * pad / inner;
+        for (Vertex& v : prepared.mesh.positions) v = center + scale * (v - center);
+        return prepared;
+      }
+    }
+  }
+  // Otherwise the proxy must keep the rounding bound away from the mesh.
+  if (!surfaces_clear_by(p.mesh, mesh.mesh, 2 * pad)) {
+    prepared.note = name + ": it comes within float rounding (" + std::to_string(2 * pad) +
+                    " mesh units) of the mesh, so its " + kind_text(prepared.kind) +
+                    " claim may not survive single-precision ray tests: used as a general proxy";
+    prepared.kind = ProxyKind::general;
+  }
+  return prepared;
+}
+
+}  // namespace
+
+RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, const RenderWorldOptions& options)
     : impl_(std::make_unique<Impl>()) {
   Impl& w = *impl_;
-  w.counting = counting;
+  w.counting = options.counting;
+  w.masks = options.ray_masks && rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
   if (proxies.size() != scene.instances.size()) throw Error("render: one proxy set per scene instance expected");
-  std::map<std::string, RTCScene> shared;  // "mesh\nspec" -> scene
-  auto scene_for = [&](const std::string& mesh, const std::optional<InstanceProxy>& proxy) -> RTCScene {
-    const std::string key = mesh + "\n" + (proxy ? proxy->spec : std::string("mesh"));
-    if (auto it = shared.find(key); it != shared.end()) return it->second;
-    const TriangleMesh& triangles = scene.mesh(mesh).mesh;
-    RTCScene object = proxy ? w.scene_of(*proxy) : w.scene_of({ProxyKind::outside, "mesh", triangles, {}});
-    shared.emplace(key, object);
-    return object;
-  };
-  // Closed convex proxies (boxes, bounded hulls) of few faces are clipped against instead.
-  std::map<std::string, std::optional<ConvexPolytope>> polytopes;  // "mesh\nspec"
-  auto polytope_for = [&](const std::string& mesh, const std::optional<InstanceProxy>& proxy) -> const std::optional<ConvexPolytope>& {
-    const std::string key = mesh + "\n" + (proxy ? proxy->spec : std::string("mesh"));
-    if (auto it = polytopes.find(key); it != polytopes.end()) return it->second;
-    const TriangleMesh& triangles = proxy ? proxy->mesh : scene.mesh(mesh).mesh;
-    const bool spheres = proxy && !proxy->spheres.empty();
-    return polytopes.emplace(key, spheres ? std::nullopt : ConvexPolytope::from_mesh(triangles)).first->second;
-  };
   w.instance_count = scene.instances.size();
-  w.has_inside = false;
-  for (const MeshProxies& p : proxies) w.has_inside = w.has_inside || p.inside.has_value();
+
+  // Lights in world space; the scene's centre and extent.
+  for (std::size_t l = 0; l < scene.lights.size(); ++l)
+    for (const auto& t : scene.lights[l].triangles) {
+      const auto base = static_cast<VertexIndex>(w.lights_world.positions.size());
+      w.lights_world.positions.insert(w.lights_world.positions.end(), t.begin(), t.end());
+      w.lights_world.triangles.push_back({base, base + 1, base + 2});
+      w.light_of_triangle.push_back(static_cast<int>(l));
+      w.light_normals.push_back((t[1] - t[0]).cross(t[2] - t[0]).normalized());
+    }
+  std::map<std::string, Vertex> mesh_center;        // each mesh's box centre: its objects are stored relative to it
+  std::map<std::string, double> object_magnitude;   // largest |coordinate - centre| of a mesh and its proxies
+  std::map<std::string, double> least_scale;        // smallest singular value of its instances' transforms
+  BoundingBox scene_box = bounding_box(w.lights_world);
+  std::vector<BoundingBox> world_boxes;
+  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    const SceneInstance& instance = scene.instances[i];
+    const TriangleMesh& mesh = scene.mesh(instance.mesh).mesh;
+    if (!mesh_center.contains(instance.mesh)) {
+      const BoundingBox box = bounding_box(mesh);
+      const Vertex center = box.empty() ? Vertex::Zero() : Vertex(0.5 * (box.min + box.max));
+      mesh_center[instance.mesh] = center;
+      object_magnitude[instance.mesh] = largest_magnitude(box, center);
+    }
+    double& magnitude = object_magnitude[instance.mesh];
+    const Vertex& center = mesh_center[instance.mesh];
+    for (const auto* proxy : {&proxies[i].stochastic, &proxies[i].outside, &proxies[i].inside}) {
+      if (!*proxy) continue;
+      magnitude = std::max(magnitude, largest_magnitude(bounding_box((*proxy)->mesh), center));
+      for (const Sphere& s : (*proxy)->spheres) magnitude = std::max(magnitude, (s.center - center).cwiseAbs().maxCoeff() + s.radius);
+    }
+    const double smallest = Eigen::JacobiSVD<Eigen::Matrix3d>(instance.transform.linear()).singularValues()(2);
+    least_scale[instance.mesh] = std::min(least_scale.contains(instance.mesh) ? least_scale[instance.mesh] : smallest, smallest);
+    BoundingBox world;
+    for (const Vertex& v : used_positions(mesh)) world.extend(instance.transform * v);
+    world_boxes.push_back(world);
+    if (!world.empty()) scene_box.extend(world.min), scene_box.extend(world.max);
+  }
+  w.origin = scene_box.empty() ? Vertex::Zero() : Vertex(0.5 * (scene_box.min + scene_box.max));
+  w.scene_magnitude = std::max(largest_magnitude(scene_box, w.origin), std::numeric_limits<double>::min());
+  // The rounding bound of an object: its own extent and the longest segment of the scene,
+  // both in object units (Embree's errors grow with the distance of a ray's origin).
+  auto object_pad = [&](const std::string& mesh) {
+    return kFloatPadding * (object_magnitude[mesh] + 2 * w.scene_magnitude / std::max(least_scale[mesh], 1e-300));
+  };
+
   w.camera = w.top_scene();
   w.proxy = w.top_scene();
   w.outside = w.top_scene();
   w.inside = w.top_scene();
+  std::map<std::string, RTCScene> mesh_scenes;            // mesh name -> its triangles
+  std::map<std::string, PreparedProxy> prepared_proxies;  // "mesh\nspec"
+  std::map<std::string, RTCScene> proxy_scenes;           // "mesh\nspec"
+  std::map<std::string, std::optional<ConvexPolytope>> mesh_polytopes;
+  auto mesh_scene = [&](const std::string& name) {
+    if (auto it = mesh_scenes.find(name); it != mesh_scenes.end()) return it->second;
+    return mesh_scenes.emplace(name, w.object_scene(scene.mesh(name).mesh, {}, mesh_center[name])).first->second;
+  };
+  auto prepared_for = [&](const std::string& name, const InstanceProxy& p) -> const PreparedProxy& {
+    const std::string key = name + "\n" + p.spec;
+    if (auto it = prepared_proxies.find(key); it != prepared_proxies.end()) return it->second;
+    PreparedProxy prepared = prepare_proxy(p, scene.mesh(name), object_pad(name));
+    if (!prepared.note.empty()) w.note(prepared.note);
+    return prepared_proxies.emplace(key, std::move(prepared)).first->second;
+  };
+  auto proxy_scene = [&](const std::string& name, const PreparedProxy& p) {
+    const std::string key = name + "\n" + p.spec;
+    if (auto it = proxy_scenes.find(key); it != proxy_scenes.end()) return it->second;
+    return proxy_scenes.emplace(key, w.object_scene(p.mesh, p.spheres, mesh_center[name])).first->second;
+  };
+
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {
     const SceneInstance& instance = scene.instances[i];
+    const SceneMesh& mesh = scene.mesh(instance.mesh);
     const MeshProxies& p = proxies[i];
     const auto id = static_cast<unsigned>(i);
     const unsigned mask = instance_mask(i);
-    w.add_instance(w.camera, scene_for(instance.mesh, std::nullopt), instance.transform, id, mask);
-    // A proxy scene holds each instance's proxy clipped as a convex solid, or else traced by
-    // Embree (whose object scene is only built then).
-    auto add_proxy = [&](RTCScene top, const std::optional<InstanceProxy>& proxy) {
-      if (const std::optional<ConvexPolytope>& polytope = polytope_for(instance.mesh, proxy))
-        w.convex[top].push_back({id, polytope->transformed(instance.transform)});
+    const Eigen::Affine3d object_to_world = instance.transform * Eigen::Translation3d(mesh_center[instance.mesh]);
+    const Eigen::Vector3d scales = Eigen::JacobiSVD<Eigen::Matrix3d>(instance.transform.linear()).singularValues();
+    // World units: rays as long as the scene, whose errors in object space the most
+    // anisotropic direction of the transform brings back, and the object's own extent.
+    const double pad_world = kFloatPadding * (2 * w.scene_magnitude * scales(0) / std::max(scales(2), 1e-300) +
+                                              scales(0) * object_magnitude[instance.mesh]);
+    const std::string instance_name = "instance " + std::to_string(i) + " (mesh \"" + instance.mesh + "\")";
+    w.add_instance(w.camera, mesh_scene(instance.mesh), object_to_world, id, mask);
+
+    // Adds a prepared proxy to a top scene: clipped as a world-space solid, or traced.
+    auto add_proxy = [&](RTCScene top, const PreparedProxy& prepared) {
+      if (prepared.polytope)
+        w.convex[top].push_back({id, prepared.polytope->transformed(instance.transform).grown(pad_world)});
       else
-        w.add_instance(top, scene_for(instance.mesh, proxy), instance.transform, id, mask);
+        w.add_instance(top, proxy_scene(instance.mesh, prepared), object_to_world, id, mask);
     };
-    add_proxy(w.proxy, p.stochastic);
-    add_proxy(w.outside, p.outside);
-    if (p.inside) add_proxy(w.inside, p.inside);
+    // An outside proxy traced as a surface proves a miss only with every light outside it.
+    auto traced_outside_usable = [&](const PreparedProxy& prepared) {
+      return prepared.polytope || w.lights_outside(transformed_mesh(prepared.mesh, instance.transform), pad_world);
+    };
+    // An inside proxy proves a hit only with every light outside the mesh's solid.
+    std::optional<bool> lights_outside_mesh;
+    auto inside_usable = [&]() {
+      if (!lights_outside_mesh) lights_outside_mesh = w.lights_outside(transformed_mesh(mesh.mesh, instance.transform), pad_world);
+      return *lights_outside_mesh;
+    };
+
+    // Stochastic: the proxy, or the mesh itself (V' = V exactly: traced, never clipped).
+    ProxyKind kind = ProxyKind::outside;
+    if (p.stochastic) {
+      const PreparedProxy& prepared = prepared_for(instance.mesh, *p.stochastic);
+      kind = prepared.kind;
+      if (kind == ProxyKind::outside && !traced_outside_usable(prepared)) {
+        w.note(instance_name + ": a light lies inside (or within rounding of) its outside proxy " + prepared.spec +
+               ", which a traced surface cannot prove: used as a general proxy");
+        kind = ProxyKind::general;
+      }
+      if (kind == ProxyKind::inside && !inside_usable()) {
+        w.note(instance_name + ": a light lies inside (or within rounding of) the mesh's solid, so its inside proxy " +
+               prepared.spec + " proves nothing: used as a general proxy");
+        kind = ProxyKind::general;
+      }
+      add_proxy(w.proxy, prepared);
+    } else {
+      w.add_instance(w.proxy, mesh_scene(instance.mesh), object_to_world, id, mask);
+    }
+    w.is_exact.push_back(!p.stochastic.has_value());
+    w.stochastic_kinds.push_back(kind);
+
+    // Outside (bounds): a usable outside proxy, else the mesh itself (a clipped solid when
+    // it is closed and convex, which holds it).
+    bool outside_added = false;
+    if (p.outside) {
+      const PreparedProxy& prepared = prepared_for(instance.mesh, *p.outside);
+      if (prepared.kind == ProxyKind::outside && traced_outside_usable(prepared)) {
+        add_proxy(w.outside, prepared);
+        outside_added = true;
+      } else if (prepared.kind == ProxyKind::outside) {
+        w.note(instance_name + ": a light lies inside (or within rounding of) its outside proxy " + prepared.spec +
+               ": bounds traces the mesh instead");
+      }
+    }
+    if (!outside_added) {
+      auto it = mesh_polytopes.find(instance.mesh);
+      if (it == mesh_polytopes.end()) it = mesh_polytopes.emplace(instance.mesh, ConvexPolytope::from_mesh(mesh.mesh)).first;
+      if (it->second)
+        w.convex[w.outside].push_back({id, it->second->transformed(instance.transform).grown(pad_world)});
+      else
+        w.add_instance(w.outside, mesh_scene(instance.mesh), object_to_world, id, mask);
+    }
+
+    // Inside (bounds): only a usable one; traced (balls are solids), never clipped.
+    if (p.inside) {
+      const PreparedProxy& prepared = prepared_for(instance.mesh, *p.inside);
+      if (prepared.kind == ProxyKind::inside && inside_usable() && (!prepared.spheres.empty() || !prepared.mesh.triangles.empty())) {
+        w.add_instance(w.inside, proxy_scene(instance.mesh, prepared), object_to_world, id, mask);
+        w.has_inside = true;
+      } else if (prepared.kind == ProxyKind::inside) {
+        w.note(instance_name + ": a light lies inside (or within rounding of) the mesh's solid, so its inside proxy " +
+               prepared.spec + " proves nothing: bounds does not use it");
+      }
+    }
+
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
     auto sides = w.mesh_sides.find(instance.mesh);
-    if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(scene.mesh(instance.mesh).mesh)).first;
+    if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(mesh.mesh)).first;
     w.instance_sides.push_back(&sides->second);
-    w.instance_meshes.push_back(&scene.mesh(instance.mesh).mesh);
-    BoundingBox world;
-    const std::vector<Vertex> points = used_positions(scene.mesh(instance.mesh).mesh);
-    for (const Vertex& v : points) world.extend(instance.transform * v);
-    Sphere sphere{0.5 * (world.min + world.max), 0.0};
-    for (const Vertex& v : points) sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
-    sphere.radius *= 1 + 1e-6;  // beyond float rounding of Embree's triangle tests
+    w.instance_meshes.push_back(&mesh.mesh);
+    BoundingBox world = world_boxes[i];
+    Sphere sphere{world.empty() ? Vertex::Zero() : Vertex(0.5 * (world.min + world.max)), 0.0};
+    for (const Vertex& v : used_positions(mesh.mesh)) sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
+    if (!world.empty()) {
+      world.min.array() -= pad_world;
+      world.max.array() += pad_world;
+    }
+    sphere.radius += pad_world;
     w.instance_bounds.push_back(world);
     w.instance_spheres.push_back(sphere);
-    w.is_exact.push_back(!p.stochastic.has_value());
-    w.stochastic_kinds.push_back(p.stochastic ? p.stochastic->kind : ProxyKind::outside);
-    w.has_outside.push_back(p.outside.has_value());
   }
-  // Lights: visible to camera rays only (mask), one geometry after the instances.
-  TriangleMesh lights;
-  for (std::size_t l = 0; l < scene.lights.size(); ++l)
-    for (const auto& t : scene.lights[l].triangles) {
-      const auto base = static_cast<VertexIndex>(lights.positions.size());
-      lights.positions.insert(lights.positions.end(), t.begin(), t.end());
-      lights.triangles.push_back({base, base + 1, base + 2});
-      w.light_of_triangle.push_back(static_cast<int>(l));
-      w.light_normals.push_back((t[1] - t[0]).cross(t[2] - t[0]).normalized());
-    }
-  if (!lights.triangles.empty()) {
-    const unsigned id = attach_triangles(w.device, w.camera, lights, kLightMask);
+
+  // Lights: visible to camera rays only (mask, or the filter function), one geometry after the instances.
+  if (!w.lights_world.triangles.empty()) {
+    TriangleMesh local = w.lights_world;
+    for (Vertex& v : local.positions) v -= w.origin;
+    const unsigned id = attach_triangles(w.device, w.camera, local, kLightMask);
     if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
   }
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
@@ -315,7 +556,7 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rayhit{};
-  rayhit.ray = segment_ray(origin, origin + direction);
+  rayhit.ray = segment_ray(origin - impl_->origin, origin - impl_->origin + direction);
   rayhit.ray.tfar = std::numeric_limits<float>::infinity();
   rayhit.ray.mask = kAllInstances | kLightMask;
   rayhit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -323,7 +564,8 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
   rtcIntersect1(impl_->camera, &context, &rayhit);
   if (rayhit.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   SurfaceHit hit;
-  hit.position = origin + static_cast<double>(rayhit.ray.tfar) * direction;
+  hit.distance = static_cast<double>(rayhit.ray.tfar);
+  hit.position = origin + hit.distance * direction;
   Vertex normal(rayhit.hit.Ng_x, rayhit.hit.Ng_y, rayhit.hit.Ng_z);
   if (rayhit.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
     hit.instance = static_cast<int>(rayhit.hit.instID[0]);
@@ -345,6 +587,11 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
   normal.normalize();
   hit.normal = normal.dot(direction) > 0 ? -normal : normal;
   return hit;
+}
+
+double RenderWorld::surface_offset(const Vertex& point, double distance) const {
+  return kSurfaceOffset * ((point - impl_->origin).cwiseAbs().maxCoeff() + std::abs(distance)) +
+         std::numeric_limits<double>::min();
 }
 
 bool RenderWorld::mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
@@ -380,10 +627,6 @@ bool RenderWorld::counting() const { return impl_->counting; }
 
 bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
 
-bool RenderWorld::outside_complete(int skip) const {
-  for (std::size_t i = 0; i < impl_->has_outside.size(); ++i)
-    if (static_cast<int>(i) != skip && !impl_->has_outside[i]) return false;
-  return true;
-}
+const std::vector<std::string>& RenderWorld::notes() const { return impl_->notes; }
 
 }  // namespace visproxy

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/proxy_kind.h"
@@ -20,11 +21,16 @@ struct InstanceProxy {
   std::string spec;
   TriangleMesh mesh;
   std::vector<Sphere> spheres;  ///< sphere proxies (mesh empty)
+  /// The claim of `kind` is proved for this mesh: `visproxy verify` (verify_proxy) found it
+  /// to hold, checked against these very files. Outside and inside proxies that are not
+  /// proved are used as general proxies: no shortcut and no zero probability rests on them.
+  bool proved = false;
 };
 
 /// The proxies of one instance by role (in its mesh's frame). Any may be missing: an
-/// instance without a stochastic proxy stands in for itself; without an outside proxy its
-/// mesh is its own outside proxy; without an inside proxy nothing is proved occluded.
+/// instance without a stochastic proxy stands in for itself (traced exactly, V' = V);
+/// without an outside proxy its mesh is its own outside proxy; without an inside proxy
+/// nothing is proved occluded.
 struct MeshProxies {
   std::optional<InstanceProxy> stochastic;  ///< the proxy `--visibility stochastic` uses
   std::optional<InstanceProxy> outside;     ///< `--visibility bounds`: certainly-unoccluded test
@@ -33,6 +39,7 @@ struct MeshProxies {
 
 struct SurfaceHit {
   Vertex position;
+  double distance = 0;  ///< along the ray, world units (the ray's direction is a unit vector)
   Vertex normal;      ///< unit geometric normal, world space, facing the incoming ray
   int instance = -1;  ///< scene instance, or -1 for a light
   int light = -1;     ///< light index when a light was hit
@@ -55,13 +62,39 @@ struct InstanceFilter {
 /// The mask bit of an instance (bit i % 31).
 unsigned instance_bit(std::size_t instance);
 
+struct RenderWorldOptions {
+  /// Shadow queries run through CountingBvh (our traversal of Embree-built BVHs,
+  /// double-precision primitive tests) and add their work to thread_counts(); camera rays
+  /// still use Embree.
+  bool counting = false;
+  /// Use Embree's ray masks to skip instances, when the device supports them (Debian's
+  /// Embree does); otherwise, or with false, a filter function decides every hit.
+  bool ray_masks = true;
+};
+
+/// The scene as shadow and camera rays see it, with every proof the visibility modes rely
+/// on checked before it is used:
+///  - Every proxy is a solid. Closed convex proxies of at most 64 face planes are clipped
+///    as solids (ConvexPolytope); proxies Embree traces as surfaces answer "miss" only when
+///    the segment crosses none of their faces, which proves the segment outside the solid
+///    only because one end, the light's, is: a proxy is used as an outside (or, for its
+///    mesh, inside) proxy only when every light lies outside its solid (outside proxies) or
+///    outside the mesh's solid (inside proxies), by a rounding margin. Shadow segments must
+///    therefore end on a light.
+///  - Only proved proxies (InstanceProxy::proved) keep their kind.
+///  - The proofs are made in double; Embree works in float. Every point is handed to Embree
+///    relative to the scene's centre and every mesh relative to its own, so that rounding
+///    is relative to the scene's and the object's extent, not to their distance from the
+///    origin; proxies are then padded by a bound on that rounding: convex outside proxies
+///    pushed out (clipped ones) or scaled about their centre (traced ones), other outside
+///    proxies required to keep that distance from the mesh, inside spheres shrunk.
+/// A proxy that fails a condition is used as a general proxy (and not by bounds), and
+/// notes() says why.
 class RenderWorld {
  public:
   /// `proxies` has one entry per scene instance (same order), possibly empty. Proxies with
-  /// the same spec on instances of the same mesh share one BVH. With `counting`, shadow
-  /// queries run through CountingBvh (our traversal of Embree-built BVHs, double-precision
-  /// primitive tests) and add their work to thread_counts(); camera rays still use Embree.
-  RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, bool counting = false);
+  /// the same spec on instances of the same mesh share one BVH.
+  RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, const RenderWorldOptions& options = {});
 
   /// The work of this thread's shadow queries so far (counting worlds only): one node per
   /// instance whose world box is tested, plus the nodes and primitives of its BVH.
@@ -71,31 +104,41 @@ class RenderWorld {
   RenderWorld(const RenderWorld&) = delete;
   RenderWorld& operator=(const RenderWorld&) = delete;
 
-  /// The nearest surface or light along the ray, if any.
+  /// The nearest surface or light along the ray (unit direction), if any.
   std::optional<SurfaceHit> intersect(const Vertex& origin, const Vertex& direction) const;
+
+  /// How far to move a point off the surface it was found on, along the normal, so that
+  /// rays leaving it do not meet that surface again through float rounding: 8 float ulps of
+  /// the point's coordinates (relative to the scene's centre) plus of the distance the ray
+  /// that found it travelled (pbrt's approach, with Embree's single precision). World units.
+  double surface_offset(const Vertex& point, double distance) const;
 
   /// Whether the open segment is blocked by the exact geometry of the instances the filter
   /// lets through (lights never block).
   bool mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
-  /// The same against each instance's stochastic proxy (its mesh where it has none).
+  /// The same against each instance's stochastic proxy (its mesh where it has none). The
+  /// segment must end on a light (`to`) for the proxies' kinds to hold.
   bool proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
-  /// The same against the instances' outside (inside) proxies; instances without one are
-  /// treated as blocking (outside) or as empty (inside), so both tests stay conservative.
+  /// The same against the instances' outside (inside) proxies; instances without a usable
+  /// one are their own outside proxy (exact) or have no inside proxy, so both tests stay
+  /// conservative for segments that end on a light.
   bool outside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
   bool inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
 
   /// The kind of the union of every instance's stochastic proxy except `skip`'s: outside
-  /// (inside) when each is outside (inside) or exact, general otherwise.
+  /// (inside) when each is a usable outside (inside) proxy or exact, general otherwise.
   ProxyKind stochastic_kind(int skip) const;
-  /// World-space bounding box of an instance's mesh, and the sphere around its centre that
-  /// holds every vertex (tighter than the box's for round meshes).
+  /// World-space bounding box of an instance's mesh, and a sphere around its centre that
+  /// holds every vertex (tighter than the box's for round meshes), both padded by the
+  /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
 
-  /// Whether any instance has an inside proxy (else inside_blocks is always false).
+  /// Whether any instance has a usable inside proxy (else inside_blocks is always false).
   bool has_inside_proxies() const;
-  /// Whether every instance other than `skip` has an outside proxy.
-  bool outside_complete(int skip) const;
+
+  /// One line for each proxy that is not used with its kind's guarantees, and why.
+  const std::vector<std::string>& notes() const;
 
  private:
   struct Impl;

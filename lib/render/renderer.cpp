@@ -40,6 +40,9 @@ class PixelRandom {
   std::uint64_t state_;
 };
 
+// Seeds the stochastic estimators' stream apart from the camera and light stream.
+constexpr std::uint64_t kChoiceStream = 0x43484F4943455321ull;
+
 // Runs a callable when the scope ends, on every return path.
 template <typename F>
 class ScopeExit {
@@ -161,16 +164,12 @@ class LightShaft {
   std::vector<Vertex> corners_;
 };
 
-double scene_scale(const Scene& scene) {
-  BoundingBox box;
-  for (const SceneInstance& instance : scene.instances) {
-    const BoundingBox local = bounding_box(scene.mesh(instance.mesh).mesh);
-    for (int corner = 0; corner < 8; ++corner)
-      box.extend(instance.transform * Vertex(corner & 1 ? local.max.x() : local.min.x(),
-                                             corner & 2 ? local.max.y() : local.min.y(),
-                                             corner & 4 ? local.max.z() : local.min.z()));
-  }
-  return std::max(box.diagonal(), 1e-30);
+// The light end of a shadow segment: the sample moved off the light's plane, towards the
+// side the shading point is on, by the world's rounding offset (a light lying on a wall or
+// a ceiling must not be shadowed by that surface through float rounding).
+Vertex light_end(const RenderWorld& world, const LightSample& y, const Vertex& x) {
+  const double side = y.normal.dot(x - y.position) >= 0 ? 1.0 : -1.0;
+  return y.position + side * world.surface_offset(y.position, 0.0) * y.normal;
 }
 
 }  // namespace
@@ -195,6 +194,26 @@ std::string_view visibility_mode_name(VisibilityMode mode) {
     case VisibilityMode::bounds: return "bounds";
   }
   return "exact";
+}
+
+void validate(const RenderOptions& options) {
+  auto fail = [](const std::string& problem) { throw Error("render options: " + problem); };
+  if (options.spp < 1) fail("spp (camera samples per pixel) must be at least 1, not " + std::to_string(options.spp));
+  if (options.shadow_rays < 1) fail("shadow_rays must be at least 1, not " + std::to_string(options.shadow_rays));
+  if (options.probe_passes < 0) fail("probe_passes must not be negative");
+  if (!(options.seconds >= 0) || !std::isfinite(options.seconds)) fail("seconds must be a finite number, 0 or more");
+  if (!(options.probability_floor >= 0 && options.probability_floor <= 1.0 / 3))
+    fail("probability_floor must lie in [0, 1/3]");
+  if (!(options.correction_scale > 0) || !std::isfinite(options.correction_scale)) fail("correction_scale must be positive");
+  if (options.visibility != VisibilityMode::stochastic) return;
+  const bool control_variate = options.estimator == StochasticEstimator::control_variate;
+  if (options.probabilities == ProbabilityMode::learned && !control_variate)
+    fail("learned probabilities need the control-variate estimator");
+  if (options.probabilities == ProbabilityMode::adaptive && options.probe_rays < 1)
+    fail("adaptive probabilities need at least one probe ray");
+  if (options.probabilities != ProbabilityMode::equal && !(options.probability_floor > 0))
+    fail("probability_floor must be positive with adaptive or learned probabilities: a ray type the probes or a "
+         "pixel's corrections have not seen would get probability 0, and the estimate would be biased wherever it occurs");
 }
 
 nlohmann::json RenderStats::to_json() const {
@@ -284,7 +303,6 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
   const Vertex up = right.cross(forward);
   const double tan_half = std::tan(camera.fov_degrees * std::numbers::pi / 360.0);
   const double aspect = static_cast<double>(camera.width) / camera.height;
-  const double offset = 1e-6 * scene_scale(scene);
   const LightSampler lights(scene);
   std::vector<ShadowSegment> segments;
   if (lights.empty()) return segments;
@@ -294,12 +312,12 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
     const std::optional<SurfaceHit> hit = world.intersect(camera.from, (forward + sx * right + sy * up).normalized());
     const LightSample y = lights.sample(random);
     if (!hit || hit->light >= 0 || exclude[static_cast<std::size_t>(hit->instance)]) continue;
-    const Vertex x = hit->position + offset * hit->normal;
+    const Vertex x = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
     const Vertex to_light = y.position - x;
     double cos_y = -y.normal.dot(to_light);
     if (y.two_sided) cos_y = std::abs(cos_y);
     if (hit->normal.dot(to_light) <= 0 || cos_y <= 0) continue;
-    segments.push_back({x, y.position});
+    segments.push_back({x, light_end(world, y, x)});
   }
   return segments;
 }
@@ -313,7 +331,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const Vertex up = right.cross(forward);
   const double tan_half = std::tan(camera.fov_degrees * std::numbers::pi / 360.0);
   const double aspect = static_cast<double>(width) / height;
-  const double offset = 1e-6 * scene_scale(scene);
+  validate(options);
   const LightSampler lights(scene);
   const LightShaft shaft(scene);
   const bool stochastic = options.visibility == VisibilityMode::stochastic;
@@ -326,8 +344,6 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   std::vector<Color> sum(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), Color::Zero());
   std::vector<double> p1_sum(sum.size(), 0.0), p1_count(sum.size(), 0.0), tests(sum.size(), 0.0);
   const bool control_variate = stochastic && options.estimator == StochasticEstimator::control_variate;
-  if (stochastic && options.probabilities == ProbabilityMode::learned && !control_variate)
-    throw Error("render: learned probabilities need the control-variate estimator");
   const CorrectionOptions correction_options{.scale = options.correction_scale, .floor = options.probability_floor};
   // adaptive with probe_passes > 0: the ray types each pixel's probes saw so far.
   std::vector<RayTypeCounts> pixel_probes(options.probe_passes > 0 ? sum.size() : 0);
@@ -339,7 +355,11 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 
   auto shade = [&](int px, int py, int pass) {
     const std::size_t pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px);
+    // Camera and light samples come from one stream, the stochastic estimators' choices
+    // (terms, corrections, probe rays) from another: every visibility mode traces the same
+    // segments for a seed, so images of two modes differ only by their visibility answers.
     PixelRandom random(options.seed, pixel, static_cast<std::uint64_t>(pass));
+    PixelRandom choices(options.seed ^ kChoiceStream, pixel, static_cast<std::uint64_t>(pass));
     RenderStats& stats = thread_stats.local();
     const std::uint64_t tests_before = stats.exact_tests + stats.proxy_tests;
     const TraversalCounts counts_before = RenderWorld::thread_counts();
@@ -366,7 +386,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     if (lights.empty()) return;
     ++stats.shading_points;
     const int own = hit->instance;
-    const Vertex x = hit->position + offset * hit->normal;
+    const Vertex x = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
     const Color brdf = scene.instances[static_cast<std::size_t>(own)].albedo / std::numbers::pi;
 
     const ProxyKind kind = kinds[static_cast<std::size_t>(own)];
@@ -379,10 +399,11 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       if (options.probe_passes == 0 || pass < options.probe_passes) {
         const InstanceFilter rest{.skip = options.split ? own : -1, .only = -1};
         for (int k = 0; k < options.probe_rays; ++k) {
-          const LightSample y = lights.sample(random);
+          const LightSample y = lights.sample(choices);
           if (hit->normal.dot(y.position - x) <= 0) continue;  // below the surface: never traced
           ++stats.probe_rays;
-          counts.add(world.mesh_blocks(x, y.position, rest), world.proxy_blocks(x, y.position, rest));
+          const Vertex end = light_end(world, y, x);
+          counts.add(world.mesh_blocks(x, end, rest), world.proxy_blocks(x, end, rest));
         }
       }
       const RayTypeFractions fractions = RayTypeFractions::from(counts);
@@ -427,15 +448,16 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       if (y.two_sided) cos_y = std::abs(cos_y);
       if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) continue;
       ++stats.shadow_rays;
+      const Vertex end = light_end(world, y, x);
       double visibility = 0;
       switch (options.visibility) {
         case VisibilityMode::exact:
           ++stats.exact_tests;
-          visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
+          visibility = world.mesh_blocks(x, end) ? 0 : 1;
           break;
         case VisibilityMode::stochastic:
           if (control_variate) {
-            const ControlVariateSample sample = control_variate_visibility(world, x, y.position, own, corrections, random.uniform(),
+            const ControlVariateSample sample = control_variate_visibility(world, x, end, own, corrections, choices.uniform(),
                                                                            options.split, stats, hit->own_mesh_behind);
             visibility = sample.visibility;
             if (sample.proxy_traced) {
@@ -448,7 +470,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
             }
             break;
           }
-          visibility = stochastic_visibility(world, x, y.position, own, probabilities, random.uniform(), options.split, stats,
+          visibility = stochastic_visibility(world, x, end, own, probabilities, choices.uniform(), options.split, stats,
                                              hit->own_mesh_behind);
           break;
         case VisibilityMode::bounds: {
@@ -461,26 +483,26 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           // Only the instances in the shaft whose bounding sphere this segment meets can block it.
           unsigned bits = 0;
           for (const std::size_t i : shaft_instances)
-            if (segment_meets_ball(world.instance_sphere(i), x, y.position - x, 0.0, 1.0)) bits |= instance_bit(i);
+            if (segment_meets_ball(world.instance_sphere(i), x, end - x, 0.0, 1.0)) bits |= instance_bit(i);
           const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
           bool rest_free = bits == 0;
           if (!rest_free && !traced_before) {
             ++stats.proxy_tests;
             proof_tried = true;
-            rest_free = !world.outside_blocks(x, y.position, rest);
+            rest_free = !world.outside_blocks(x, end, rest);
           }
           if (rest_free) {
             ++stats.bounds_unoccluded;
             visibility = 1;
             if (!hit->own_mesh_behind) {
               ++stats.exact_tests;
-              visibility = world.mesh_blocks(x, y.position, {.skip = -1, .only = own}) ? 0 : 1;
+              visibility = world.mesh_blocks(x, end, {.skip = -1, .only = own}) ? 0 : 1;
             }
             break;
           }
           if (world.has_inside_proxies() && !traced_before) {
             ++stats.proxy_tests;
-            if (world.inside_blocks(x, y.position, rest)) {
+            if (world.inside_blocks(x, end, rest)) {
               ++stats.bounds_occluded;
               break;
             }
@@ -489,7 +511,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
           traced_before = true;
           ++stats.bounds_traced;
           ++stats.exact_tests;
-          visibility = world.mesh_blocks(x, y.position) ? 0 : 1;
+          visibility = world.mesh_blocks(x, end) ? 0 : 1;
           break;
         }
       }

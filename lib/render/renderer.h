@@ -35,7 +35,7 @@ struct RenderOptions {
   /// first P passes and keeps the ray types seen per pixel for every later pass, which
   /// stays unbiased (a pass's probabilities depend only on draws made before its shadow rays).
   int probe_passes = 0;
-  double probability_floor = 0.05; ///< least probability of each needed term (adaptive, learned)
+  double probability_floor = 0.05; ///< least probability of each needed term (adaptive, learned): in (0, 1/3]
   double correction_scale = 2;     ///< control variate, adaptive or learned: CorrectionOptions::scale
   bool split = true;               ///< eq. 27: the shading point's own instance traced exactly
   int spp = 16;                    ///< camera samples per pixel (passes)
@@ -45,6 +45,14 @@ struct RenderOptions {
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;
 };
+
+/// Throws visproxy::Error naming the option when `options` cannot give a correct image:
+/// no samples or shadow rays, a negative or non-finite time or count, a probability floor
+/// outside [0, 1/3], a non-positive correction scale, learned probabilities with eq. 8,
+/// adaptive probabilities without probe rays, and a zero floor with adaptive or learned
+/// probabilities (a term never drawn for rays that occur makes the estimate biased; the
+/// kind's unneeded terms get 0 whatever the floor). render() calls it first.
+void validate(const RenderOptions& options);
 
 struct RenderStats {
   double seconds = 0;

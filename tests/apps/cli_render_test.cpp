@@ -39,14 +39,19 @@ void expect_bounds_identical_and_finite(CliRender& test, const std::filesystem::
     ASSERT_EQ(result.exit_code, 0) << mode << ": " << result.err;
   }
   const auto adaptive = test.render(scene, "adaptive",
-                                    "--visibility stochastic --probabilities adaptive --cost-heuristic --probability-floor 0 "
+                                    "--visibility stochastic --probabilities adaptive --cost-heuristic --probability-floor 0.01 "
                                     "--probe-rays 4 --spp 2 --maps " + size);
   ASSERT_EQ(adaptive.exit_code, 0) << adaptive.err;
-  // The control variate with degenerate probabilities: no floor, corrections almost never traced.
+  // The control variate with extreme probabilities: the smallest floor, corrections almost never traced.
   const auto learned = test.render(scene, "learned",
                                    "--visibility stochastic --estimator control-variate --probabilities learned "
-                                   "--probability-floor 0 --correction-scale 0.01 --spp 3 --maps " + size);
+                                   "--probability-floor 1e-6 --correction-scale 0.01 --spp 3 --maps " + size);
   ASSERT_EQ(learned.exit_code, 0) << learned.err;
+  // A zero floor would give ray types no sample has shown probability 0: refused, one line.
+  const auto zero = test.render(scene, "zero", "--visibility stochastic --probabilities adaptive --probability-floor 0 " + size);
+  EXPECT_EQ(zero.exit_code, 2);
+  EXPECT_NE(zero.err.find("probability_floor must be positive"), std::string::npos) << zero.err;
+  EXPECT_FALSE(std::filesystem::exists(test.folder() / "zero.pfm"));
   const auto probed = test.render(scene, "probed",
                                   "--visibility stochastic --estimator control-variate --probabilities adaptive --probe-passes 1 "
                                   "--probe-rays 2 --spp 2 " + size);

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/errors.h"
+
 #include "mesh/sphere_set.h"
 #include "test_support.h"
 
@@ -94,6 +96,136 @@ TEST(Renderer, SameSeedSameImageWhateverTheThreads) {
   EXPECT_EQ(a.stats.camera_samples, 4u * 25u);
 }
 
+// A scene for the modes' invariants: a floor, a ball with an outside box and an inside
+// ball, a second ball squashed and turned (non-uniform scale) with a bounded-hull-like
+// box, and `crowd` small boxes in a ring (each with its box as outside proxy; beyond 31
+// instances ray-mask bits are shared). Image 96 x 64: 24 tiles of 16 x 16.
+struct ModeScene {
+  Scene scene;
+  std::vector<MeshProxies> proxies;
+};
+
+ModeScene mode_scene(int crowd) {
+  ModeScene s;
+  s.scene.meshes.push_back({"floor", {}, quad({-6, -6, 0}, {12, 0, 0}, {0, 12, 0}), {}});
+  s.scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 0}, 1.0}}, 3), {}});
+  s.scene.meshes.push_back({"cube", {}, box({-0.2, -0.2, 0}, {0.2, 0.2, 0.4}), {}});
+  s.scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.6), {}});
+  Eigen::Affine3d first = Eigen::Affine3d::Identity();
+  first.translate(Vertex(-0.8, 0, 1.3));
+  s.scene.instances.push_back({"ball", first, Color(0.7, 0.5, 0.3), {}});
+  Eigen::Affine3d squashed = Eigen::Affine3d::Identity();
+  squashed.translate(Vertex(1.4, 0.5, 0.8)).rotate(Eigen::AngleAxisd(0.6, Vertex(1, 1, 0).normalized())).scale(Vertex(1.2, 0.4, 0.7));
+  s.scene.instances.push_back({"ball", squashed, Color(0.3, 0.6, 0.5), {}});
+  for (int i = 0; i < crowd; ++i) {
+    Eigen::Affine3d t = Eigen::Affine3d::Identity();
+    const double angle = 2 * std::numbers::pi * i / crowd;
+    t.translate(Vertex(3.5 * std::cos(angle), 3.5 * std::sin(angle), 0)).rotate(Eigen::AngleAxisd(angle, Vertex::UnitZ()));
+    s.scene.instances.push_back({"cube", t, Color::Constant(0.5), {}});
+  }
+  AreaLight light;
+  light.radiance = Color::Constant(6);
+  const Vertex c(-0.5, -1.5, 4), u(0, 1.5, 0), v(1.5, 0, 0);
+  light.triangles = {{c, c + u, c + u + v}, {c, c + u + v, c + v}};
+  s.scene.lights.push_back(light);
+  s.scene.camera.from = {0.5, -7, 5};
+  s.scene.camera.at = {0, 0, 0.5};
+  s.scene.camera.up = {0, 0, 1};
+  s.scene.camera.fov_degrees = 50;
+  s.scene.camera.width = 96;
+  s.scene.camera.height = 64;
+  s.proxies.resize(s.scene.instances.size());
+  const InstanceProxy ball_box{ProxyKind::outside, "aabb", box({-1, -1, -1}, {1, 1, 1}), {}, true};
+  const InstanceProxy ball_core{ProxyKind::inside, "inside:1", {}, {{{0, 0, 0}, 0.95}}, true};
+  for (const std::size_t i : {std::size_t{1}, std::size_t{2}}) {
+    s.proxies[i].outside = ball_box;
+    s.proxies[i].inside = ball_core;
+    s.proxies[i].stochastic = i == 1 ? ball_box : ball_core;
+  }
+  const InstanceProxy cube_box{ProxyKind::outside, "aabb", box({-0.25, -0.25, -0.05}, {0.25, 0.25, 0.45}), {}, true};
+  for (std::size_t i = 3; i < s.proxies.size(); ++i) s.proxies[i].outside = s.proxies[i].stochastic = cube_box;
+  return s;
+}
+
+// Every mode gives the same image whatever the number of threads, on an image of many tiles.
+TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
+  const ModeScene s = mode_scene(8);
+  const RenderWorld world(s.scene, s.proxies);
+  std::vector<RenderOptions> modes;
+  modes.push_back({.visibility = VisibilityMode::exact, .spp = 3, .shadow_rays = 2, .seed = 11});
+  modes.push_back({.visibility = VisibilityMode::bounds, .spp = 3, .shadow_rays = 2, .seed = 11});
+  modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive, .probe_rays = 4,
+                   .probe_passes = 2, .spp = 3, .shadow_rays = 2, .seed = 11});
+  modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
+                   .estimator = StochasticEstimator::control_variate, .spp = 3, .shadow_rays = 2, .seed = 11});
+  for (const RenderOptions& options : modes) {
+    const RenderResult many = render(s.scene, world, options);
+    RenderResult one;
+    {
+      const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+      one = render(s.scene, world, options);
+    }
+    EXPECT_EQ(many.image.pixels, one.image.pixels) << visibility_mode_name(options.visibility) << " "
+                                                    << probability_mode_name(options.probabilities);
+    EXPECT_EQ(many.stats.to_json(), [&] {
+      nlohmann::json j = one.stats.to_json();
+      j["seconds"] = many.stats.seconds;
+      return j;
+    }());
+  }
+}
+
+// Bounds gives exact's image bit for bit: where the inside proofs fire, where proxies touch
+// their mesh (the cubes' boxes hold them with 0.05 to spare, the balls' boxes touch them),
+// beyond 31 instances and under a non-uniform scale.
+TEST(Renderer, BoundsIsExactWithInsideProofsSharedMaskBitsAndSquashedInstances) {
+  const ModeScene s = mode_scene(40);
+  ASSERT_GT(s.scene.instances.size(), 31u);
+  const RenderWorld world(s.scene, s.proxies);
+  EXPECT_TRUE(world.notes().empty()) << world.notes().front();
+  const RenderOptions exact{.spp = 4, .shadow_rays = 3, .seed = 17};
+  RenderOptions bounds = exact;
+  bounds.visibility = VisibilityMode::bounds;
+  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_GT(b.stats.bounds_occluded, 100u);
+  EXPECT_GT(b.stats.bounds_unoccluded, 100u);
+  EXPECT_GT(b.stats.bounds_traced, 0u);
+  EXPECT_LT(b.stats.exact_tests, a.stats.exact_tests);
+}
+
+TEST(Renderer, OptionsThatCannotGiveACorrectImageAreRefused) {
+  const Scene scene = plane_under_light(0.0);
+  const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
+  auto refused = [&](RenderOptions options) {
+    try {
+      render(scene, world, options);
+    } catch (const Error& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refused({.shadow_rays = 0}).find("shadow_rays"), std::string::npos);
+  EXPECT_NE(refused({.spp = 0}).find("spp"), std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive, .probability_floor = 0})
+                .find("biased"),
+            std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
+                     .estimator = StochasticEstimator::control_variate, .probability_floor = 0})
+                .find("probability_floor"),
+            std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned}).find("control-variate"),
+            std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive, .probe_rays = 0})
+                .find("probe"),
+            std::string::npos);
+  EXPECT_NE(refused({.probability_floor = 0.5}).find("1/3"), std::string::npos);
+  EXPECT_NE(refused({.correction_scale = 0}).find("correction_scale"), std::string::npos);
+  EXPECT_NE(refused({.seconds = -1}).find("seconds"), std::string::npos);
+  // A zero floor with equal probabilities is fine: no term is left out.
+  EXPECT_EQ(refused({.visibility = VisibilityMode::stochastic, .probability_floor = 0, .spp = 1}), "");
+}
+
 // Counted traversal: deterministic work figures, and the same answers as Embree's
 // traversal up to float rounding of grazing rays.
 TEST(Renderer, CountedRenderIsDeterministicAndAgreesWithEmbree) {
@@ -105,7 +237,7 @@ TEST(Renderer, CountedRenderIsDeterministicAndAgreesWithEmbree) {
   scene.camera.fov_degrees = 60;
   scene.camera.width = scene.camera.height = 24;
   const std::vector<MeshProxies> none(scene.instances.size());
-  const RenderWorld embree(scene, none), counted(scene, none, true);
+  const RenderWorld embree(scene, none), counted(scene, none, {.counting = true});
   const RenderOptions options{.spp = 4, .shadow_rays = 2, .seed = 3};
   const RenderResult a = render(scene, embree, options);
   const RenderResult b = render(scene, counted, options);

@@ -1,0 +1,362 @@
+// The render world's proofs on inputs built to break them: lights inside proxies, closed
+// rooms, closed convex instances without proxies, unproved proxies, proxies that touch
+// their mesh, scenes far from the origin, and devices without ray masks.
+
+#include "render/render_world.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/random.h"
+#include "mesh/sphere_set.h"
+#include "render/render_test_scenes.h"
+#include "render/renderer.h"
+#include "verify/containment.h"
+#include "verify/sphere_containment.h"
+
+namespace visproxy {
+namespace {
+
+using testing::box;
+using testing::quad;
+
+TriangleMesh inverted(TriangleMesh mesh) {
+  for (Triangle& t : mesh.triangles) std::swap(t[1], t[2]);
+  return mesh;
+}
+
+TriangleMesh joined(const TriangleMesh& a, const TriangleMesh& b) {
+  TriangleMesh mesh = a;
+  append_mesh(mesh, b);
+  return mesh;
+}
+
+AreaLight downward_light(const Vertex& centre, double size) {
+  AreaLight light;
+  const Vertex corner = centre - Vertex(0.5 * size, 0.5 * size, 0), u(0, size, 0), v(size, 0, 0);  // u x v points down
+  light.triangles = {{corner, corner + u, corner + u + v}, {corner, corner + u + v, corner + v}};
+  light.radiance = Color::Constant(4);
+  return light;
+}
+
+double mean_estimate(const RenderWorld& world, const Vertex& from, const Vertex& to, int own, ProxyKind kind, int draws = 20000) {
+  Random random(77);
+  RenderStats stats;
+  double sum = 0;
+  for (int i = 0; i < draws; ++i)
+    sum += control_variate_visibility(world, from, to, own, equal_correction_probabilities(kind), random.uniform(), true, stats).visibility;
+  return sum / draws;
+}
+
+// A hollow shell (the cube [-2, 2]^3 with the cavity [-1, 1]^3) whose outside proxy is a
+// ball-like icosphere of radius 4, a light above the shell inside that proxy, and a floor
+// in the cavity: every floor point is in shadow. Both ends of a floor-to-light segment lie
+// inside the traced proxy, which it therefore never crosses: a world that took "crosses no
+// face" for "misses the proxy" would light the floor.
+struct LampInsideProxy {
+  Scene scene;
+  std::vector<MeshProxies> proxies;
+};
+
+LampInsideProxy lamp_inside_proxy(const TriangleMesh& proxy_mesh) {
+  LampInsideProxy s;
+  s.scene.meshes.push_back({"shell", {}, joined(box({-2, -2, -2}, {2, 2, 2}), inverted(box({-1, -1, -1}, {1, 1, 1}))), {}});
+  s.scene.meshes.push_back({"floor", {}, quad({-0.8, -0.8, -0.9}, {1.6, 0, 0}, {0, 1.6, 0}), {}});
+  s.scene.instances.push_back({"shell", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  s.scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  s.scene.lights.push_back(downward_light({0, 0, 3}, 1));
+  s.scene.camera.from = {0, 0, 0.5};
+  s.scene.camera.at = {0, 0, -0.9};
+  s.scene.camera.up = {0, 1, 0};
+  s.scene.camera.fov_degrees = 40;  // the floor fills the image
+  s.scene.camera.width = s.scene.camera.height = 16;
+  const InstanceProxy proxy{ProxyKind::outside, "ball", proxy_mesh, {}, true};
+  EXPECT_TRUE(check_containment(proxy.mesh, s.scene.meshes[0].mesh).contained());  // the claim holds
+  s.proxies.resize(2);
+  s.proxies[0].stochastic = proxy;
+  s.proxies[0].outside = proxy;
+  return s;
+}
+
+TEST(RenderWorld, LampInsideATracedOutsideProxyIsNotProvedFree) {
+  const LampInsideProxy s = lamp_inside_proxy(sphere_set_mesh({{{0, 0, 0}, 4.0}}, 2));  // 320 faces: traced
+  const RenderWorld world(s.scene, s.proxies);
+  ASSERT_FALSE(world.notes().empty());
+  EXPECT_NE(world.notes().front().find("a light lies inside"), std::string::npos) << world.notes().front();
+  EXPECT_EQ(world.stochastic_kind(1), ProxyKind::general);
+  // A floor point to the light: blocked by the shell, and the outside test says so.
+  const Vertex from(0.1, 0.2, -0.89), to(0.1, 0.1, 2.99);
+  EXPECT_TRUE(world.mesh_blocks(from, to, {.skip = 1, .only = -1}));
+  EXPECT_TRUE(world.outside_blocks(from, to, {.skip = 1, .only = -1}));
+  EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 0.0, 0.05);
+  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 5};
+  RenderOptions bounds = exact;
+  bounds.visibility = VisibilityMode::bounds;
+  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_EQ(b.stats.bounds_unoccluded, 0u);
+  EXPECT_GT(b.stats.shadow_rays, 0u);
+  for (const Color& c : a.image.pixels) EXPECT_EQ(c, Color::Zero());
+}
+
+TEST(RenderWorld, LampInsideAClippedOutsideProxyMeetsItsSolid) {
+  const LampInsideProxy s = lamp_inside_proxy(box({-3.5, -3.5, -3.5}, {3.5, 3.5, 3.5}));  // 12 faces: clipped
+  const RenderWorld world(s.scene, s.proxies);
+  EXPECT_TRUE(world.notes().empty());
+  EXPECT_EQ(world.stochastic_kind(1), ProxyKind::outside);  // a solid needs no light outside it
+  EXPECT_TRUE(world.proxy_blocks({0.1, 0.2, -0.89}, {0.1, 0.1, 2.99}, {.skip = 1, .only = -1}));
+  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 5};
+  RenderOptions bounds = exact;
+  bounds.visibility = VisibilityMode::bounds;
+  EXPECT_EQ(render(s.scene, world, exact).image.pixels, render(s.scene, world, bounds).image.pixels);
+}
+
+// A closed room (a box facing inwards) is a solid whose inside is its air: a ball in the
+// air is "inside" it. With the light in the room, a segment through that ball proves
+// nothing. A box on the floor, a small ball-shaped occluder above the room's centre with a
+// loose box as its outside proxy (so bounds reaches its inside test), the room's ball in
+// between.
+struct ClosedRoom {
+  Scene scene;
+  std::vector<MeshProxies> proxies;
+};
+
+ClosedRoom closed_room() {
+  ClosedRoom s;
+  s.scene.meshes.push_back({"room", {}, inverted(box({-3, -3, -3}, {3, 3, 3})), {}});
+  s.scene.meshes.push_back({"crate", {}, box({-0.5, -0.5, -3}, {0.5, 0.5, -2}), {}});
+  s.scene.meshes.push_back({"bead", {}, sphere_set_mesh({{{0, 0, 1.5}, 0.3}}, 2), {}});
+  for (const char* name : {"room", "crate", "bead"}) s.scene.instances.push_back({name, Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  s.scene.lights.push_back(downward_light({0, 0, 2.9}, 1.5));
+  s.scene.camera.from = {2, -2.5, 0};
+  s.scene.camera.at = {0, 0, -2.2};
+  s.scene.camera.up = {0, 0, 1};
+  s.scene.camera.fov_degrees = 40;
+  s.scene.camera.width = s.scene.camera.height = 24;
+  const InstanceProxy room_ball{ProxyKind::inside, "inside:1", {}, {{{0, 0, 0}, 1.0}}, true};
+  const Sphere ball = room_ball.spheres[0];
+  EXPECT_TRUE(check_spheres_inside(s.scene.meshes[0].mesh, {&ball, 1}).contained());  // proved: the air is its solid
+  s.proxies.resize(3);
+  s.proxies[0].stochastic = room_ball;
+  s.proxies[0].inside = room_ball;
+  s.proxies[2].outside = InstanceProxy{ProxyKind::outside, "aabb", box({-0.5, -0.5, 1}, {0.5, 0.5, 2}), {}, true};
+  return s;
+}
+
+TEST(RenderWorld, ClosedRoomsInsideProxyProvesNothingAboutItsAir) {
+  const ClosedRoom s = closed_room();
+  const RenderWorld world(s.scene, s.proxies);
+  EXPECT_FALSE(world.has_inside_proxies());
+  EXPECT_EQ(world.stochastic_kind(1), ProxyKind::general);
+  ASSERT_FALSE(world.notes().empty());
+  // From the crate's top through the room's ball to the light: free.
+  const Vertex from(0.2, 0.1, -1.99), to(0.3, 0.2, 2.89);
+  EXPECT_FALSE(world.mesh_blocks(from, to));
+  EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 1.0, 0.05);
+  const RenderOptions exact{.spp = 4, .shadow_rays = 4, .seed = 9};
+  RenderOptions bounds = exact;
+  bounds.visibility = VisibilityMode::bounds;
+  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_EQ(b.stats.bounds_occluded, 0u);
+  EXPECT_GT(b.stats.bounds_traced, 0u);  // the bead's loose box sent segments to the exact test
+}
+
+// The same room seen from outside (faces outwards, light outside): the ball proves.
+TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
+  ClosedRoom s = closed_room();
+  s.scene.meshes[0].mesh = box({-3, -3, -3}, {3, 3, 3});
+  s.scene.lights = {downward_light({0, 0, 5}, 1.5)};
+  s.scene.camera.from = {5, -6, 4};
+  s.scene.camera.at = {0, 0, 0};
+  s.scene.instances.resize(1);
+  s.proxies.resize(1);
+  s.scene.meshes[1].mesh = quad({-9, -9, -3.01}, {18, 0, 0}, {0, 18, 0});  // a floor under the room
+  s.scene.instances.push_back({"crate", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  s.proxies.resize(2);
+  const RenderWorld world(s.scene, s.proxies);
+  EXPECT_TRUE(world.has_inside_proxies());
+  EXPECT_EQ(world.stochastic_kind(1), ProxyKind::inside);
+  EXPECT_TRUE(world.notes().empty());
+}
+
+// A closed convex instance without a proxy stands in for itself exactly: a glass case
+// around the light and the objects. Were it held as a clipped solid in the stochastic
+// scene, every segment inside it would meet it, and with an inside proxy elsewhere (the
+// ball's) the estimator would return 0 for all of them.
+TEST(RenderWorld, ClosedConvexInstanceWithoutProxyIsTracedExactly) {
+  Scene scene;
+  scene.meshes.push_back({"case", {}, box({-3, -3, -3}, {3, 3, 3}), {}});
+  scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 0}, 1.0}}, 3), {}});
+  scene.meshes.push_back({"floor", {}, quad({-2.5, -2.5, -2.5}, {5, 0, 0}, {0, 5, 0}), {}});
+  for (const char* name : {"case", "ball", "floor"}) scene.instances.push_back({name, Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.lights.push_back(downward_light({0, 0, 2.5}, 1));
+  std::vector<MeshProxies> proxies(3);
+  proxies[1].stochastic = InstanceProxy{ProxyKind::inside, "inside:1", {}, {{{0, 0, 0}, 0.9}}, true};
+  const RenderWorld world(scene, proxies);
+  EXPECT_EQ(world.stochastic_kind(2), ProxyKind::inside);  // the case is exact, the ball inside
+  const Vertex from(2, 2, -2.49), to(0.2, 0.2, 2.49);  // beside the ball, inside the case
+  EXPECT_FALSE(world.mesh_blocks(from, to, {.skip = 2, .only = -1}));
+  EXPECT_FALSE(world.proxy_blocks(from, to, {.skip = 2, .only = -1}));
+  EXPECT_NEAR(mean_estimate(world, from, to, 2, ProxyKind::inside), 1.0, 1e-12);
+}
+
+// A proxy whose claim is not proved is a general proxy: here a box too small to hold the
+// ball, labelled outside. Taken at its word, segments missing the box but not the ball
+// would be free.
+TEST(RenderWorld, UnprovedProxiesAreGeneral) {
+  Scene scene;
+  scene.meshes.push_back({"floor", {}, quad({-4, -4, 0}, {8, 0, 0}, {0, 8, 0}), {}});
+  scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 2}, 1.0}}, 3), {}});
+  scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.instances.push_back({"ball", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.lights.push_back(downward_light({0, 0, 5}, 2));
+  scene.camera.from = {0, -5, 3};
+  scene.camera.at = {0, 0, 0};
+  scene.camera.up = {0, 0, 1};
+  scene.camera.width = scene.camera.height = 16;
+  std::vector<MeshProxies> proxies(2);
+  const InstanceProxy small{ProxyKind::outside, "aabb", box({-0.5, -0.5, 1.5}, {0.5, 0.5, 2.5}), {}, false};
+  EXPECT_FALSE(check_containment(small.mesh, scene.meshes[1].mesh).contained());
+  proxies[1].stochastic = small;
+  proxies[1].outside = small;
+  const RenderWorld world(scene, proxies);
+  EXPECT_EQ(world.stochastic_kind(0), ProxyKind::general);
+  ASSERT_EQ(world.notes().size(), 1u);
+  EXPECT_NE(world.notes()[0].find("not proved"), std::string::npos);
+  const Vertex from(0.8, 0, 0.01), to(0.8, 0, 4.99);  // through the ball's rim, beside the box
+  EXPECT_TRUE(world.mesh_blocks(from, to));
+  EXPECT_FALSE(world.proxy_blocks(from, to, {.skip = 0, .only = -1}));
+  EXPECT_TRUE(world.outside_blocks(from, to, {.skip = 0, .only = -1}));  // the ball's own mesh stands in
+  EXPECT_NEAR(mean_estimate(world, from, to, 0, world.stochastic_kind(0)), 0.0, 0.05);
+  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 3};
+  RenderOptions bounds = exact;
+  bounds.visibility = VisibilityMode::bounds;
+  EXPECT_EQ(render(scene, world, exact).image.pixels, render(scene, world, bounds).image.pixels);
+}
+
+// Rounding to float: an inside ball that touches its mesh (the exact proof allows it) is
+// shrunk before Embree sees it, and a convex hull that touches its mesh at every vertex is
+// scaled out before it is traced. The cube's corners are not floats (0.1, 1.2), so its
+// float faces lie a hair off the exact ones the ball touches: chords through the ball's
+// cap just inside a face would meet the unshrunk ball and miss the float cube.
+TEST(RenderWorld, TouchingProxiesStayConservativeUnderFloatRounding) {
+  Scene scene;
+  const TriangleMesh cube = box({0.1, 0.1, 0.1}, {1.2, 1.2, 1.2});
+  scene.meshes.push_back({"cube", {}, cube, {}});
+  scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 0}, 1.0}}, 3), {}});
+  scene.instances.push_back({"cube", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  Eigen::Affine3d placed = Eigen::Affine3d::Identity();
+  placed.translate(Vertex(3, 0.3, 0.2)).rotate(Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized()));
+  scene.instances.push_back({"ball", placed, Color::Constant(0.5), {}});
+  scene.lights.push_back(downward_light({0.5, 0.5, 8}, 1));
+  std::vector<MeshProxies> proxies(2);
+  // The largest double radius the exact check passes: the ball touches all six faces.
+  Sphere ball{{0.65, 0.65, 0.65}, 0.55 * (1 + 1e-15)};
+  while (!check_spheres_inside(cube, {&ball, 1}).contained()) ball.radius = std::nextafter(ball.radius, 0.0);
+  ASSERT_GT(ball.radius, 0.55 * (1 - 1e-15));
+  const InstanceProxy touching{ProxyKind::inside, "inside:1", {}, {ball}, true};
+  proxies[0].inside = touching;
+  // The ball mesh's vertices are its own hull's: a hull that touches the mesh everywhere.
+  const InstanceProxy hull{ProxyKind::outside, "hull", scene.meshes[1].mesh, {}, true};
+  ASSERT_TRUE(check_containment(hull.mesh, scene.meshes[1].mesh).contained());
+  proxies[1].outside = hull;
+  proxies[1].stochastic = hull;
+  const RenderWorld world(scene, proxies);
+  EXPECT_TRUE(world.has_inside_proxies());
+  EXPECT_EQ(world.stochastic_kind(0), ProxyKind::outside);
+  EXPECT_TRUE(world.notes().empty());
+  Random random(31);
+  int inside_hits = 0, grazing = 0;
+  const TriangleMesh& ball_mesh = scene.meshes[1].mesh;
+  for (int i = 0; i < 20000; ++i) {
+    // A chord just inside the bottom face z = 0.1, through the ball's cap.
+    const double z = 0.1 + (random.uniform() * 1.01 - 0.01) * 1e-4;
+    const double y = 0.65 + (random.uniform() - 0.5) * 1e-3;
+    const Vertex from(-2, y, z), to(3, y + 1e-4, z);
+    if (world.inside_blocks(from, to)) {
+      ++inside_hits;
+      EXPECT_TRUE(world.mesh_blocks(from, to, {.skip = -1, .only = 0})) << "z - 0.1 = " << z - 0.1;
+    }
+    // A line tangent to the ball mesh at one of its vertices (both ends outside).
+    const Vertex vertex = placed * ball_mesh.positions[static_cast<std::size_t>(i) % ball_mesh.positions.size()];
+    const Vertex out = (vertex - placed * Vertex::Zero()).normalized();
+    const Vertex side = out.cross(Vertex(0.3, 0.5, 0.8)).normalized();
+    const Vertex jitter = out * (random.uniform() - 0.5) * 1e-7;
+    const Vertex start = vertex - 2 * side + jitter, end = vertex + 2 * side + jitter;
+    if (world.mesh_blocks(start, end, {.skip = -1, .only = 1})) {
+      ++grazing;
+      EXPECT_TRUE(world.outside_blocks(start, end, {.skip = -1, .only = 1}));
+      EXPECT_TRUE(world.proxy_blocks(start, end, {.skip = -1, .only = 1}));
+    }
+  }
+  EXPECT_GT(inside_hits, 100);
+  EXPECT_GT(grazing, 100);
+}
+
+// The same scene placed a million units from the origin renders as it does at the origin:
+// points are handed to Embree relative to the scene's centre and meshes relative to their
+// own, and surface offsets follow the coordinates' magnitude there. Bounds stays exact.
+TEST(RenderWorld, SceneFarFromTheOriginRendersAsAtTheOrigin) {
+  auto make = [](const Vertex& shift) {
+    Scene scene;
+    TriangleMesh floor = quad(shift + Vertex(-3, -3, 0), {6, 0, 0}, {0, 6, 0});
+    TriangleMesh crate = box(shift + Vertex(-0.3, -0.3, 0), shift + Vertex(0.3, 0.3, 0.4));
+    scene.meshes.push_back({"floor", {}, floor, {}});
+    scene.meshes.push_back({"crate", {}, crate, {}});
+    scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+    scene.instances.push_back({"crate", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+    scene.lights.push_back(downward_light(shift + Vertex(0.4, 0.2, 2), 0.8));
+    scene.camera.from = shift + Vertex(0, -3, 2.5);
+    scene.camera.at = shift;
+    scene.camera.up = {0, 0, 1};
+    scene.camera.width = scene.camera.height = 24;
+    return scene;
+  };
+  const Scene near = make(Vertex::Zero()), far = make(Vertex(1e6, -2e6, 3e6));
+  std::vector<MeshProxies> proxies(2);
+  proxies[1].outside = InstanceProxy{ProxyKind::outside, "aabb", box({-0.3, -0.3, 0}, {0.3, 0.3, 0.4}), {}, true};
+  std::vector<MeshProxies> far_proxies = proxies;
+  for (Vertex& p : far_proxies[1].outside->mesh.positions) p += Vertex(1e6, -2e6, 3e6);
+  const RenderWorld near_world(near, proxies), far_world(far, far_proxies);
+  const RenderOptions options{.spp = 8, .shadow_rays = 2, .seed = 21};
+  const Image a = render(near, near_world, options).image, b = render(far, far_world, options).image;
+  double difference = 0, total = 0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+    difference += (a.pixels[i] - b.pixels[i]).cwiseAbs().sum();
+    total += a.pixels[i].sum();
+  }
+  EXPECT_GT(total, 0.0);
+  EXPECT_LT(difference, 1e-3 * total) << difference << " of " << total;
+  RenderOptions bounds = options;
+  bounds.visibility = VisibilityMode::bounds;
+  EXPECT_EQ(render(far, far_world, bounds).image.pixels, b.pixels);
+}
+
+// Without ray masks every hit goes through the filter function: the same images.
+TEST(RenderWorld, FilterFunctionsGiveTheImagesOfRayMasks) {
+  const LampInsideProxy s = lamp_inside_proxy(box({-3.5, -3.5, -3.5}, {3.5, 3.5, 3.5}));
+  Scene scene = s.scene;
+  scene.camera.from = {0, -6, 5};
+  scene.camera.at = {0, 0, 0};
+  scene.camera.up = {0, 0, 1};
+  scene.meshes.push_back({"ground", {}, quad({-9, -9, -2.5}, {18, 0, 0}, {0, 18, 0}), {}});
+  scene.instances.push_back({"ground", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.lights = {downward_light({1, 1, 6}, 2)};
+  std::vector<MeshProxies> proxies = s.proxies;
+  proxies.resize(3);
+  const RenderWorld masked(scene, proxies), filtered(scene, proxies, {.ray_masks = false});
+  for (const VisibilityMode mode : {VisibilityMode::exact, VisibilityMode::bounds, VisibilityMode::stochastic}) {
+    RenderOptions options{.visibility = mode, .spp = 3, .shadow_rays = 2, .seed = 4};
+    const RenderResult a = render(scene, masked, options), b = render(scene, filtered, options);
+    EXPECT_EQ(a.image.pixels, b.image.pixels) << visibility_mode_name(mode);
+    double sum = 0;
+    for (const Color& c : a.image.pixels) sum += c.x();
+    EXPECT_GT(sum, 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace visproxy
