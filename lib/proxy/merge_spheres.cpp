@@ -241,9 +241,8 @@ class SphereTree {
   std::vector<double> x_, y_, z_, r_;  // by item; r < 0: dead
 };
 
-// A pair waiting in the queue: sphere a found b its best partner at `distance` when both
-// had these versions. While a is unchanged the key is a lower bound of a's distance to
-// every sphere unchanged since that search, even after b has changed.
+// A pair waiting in the queue, or (b == kNone) a sphere whose partner changed and that
+// must search again: `distance` is then a lower bound of its new best pair distance.
 struct Candidate {
   double distance;
   std::uint32_t a, b;                  // slots
@@ -280,18 +279,28 @@ std::vector<std::vector<Sphere>> merge_spheres(std::span<const Sphere> input, st
   SphereTree tree(spheres, options.pair_distance);
   std::vector<std::uint8_t> alive(count, 1);
   std::vector<std::uint32_t> version(count, 0);
+  std::vector<std::uint32_t> partner(count, kNone);
+  std::vector<double> partner_distance(count, kInfinity);
+  std::vector<std::vector<std::uint32_t>> partner_of(count);  // slots that chose this one (may be stale)
   std::priority_queue<Candidate, std::vector<Candidate>, LaterCandidate> queue;
   MergeSpheresStatistics counted;
-
-  auto queue_partner = [&](std::uint32_t slot, std::pair<std::uint32_t, double> best) {
-    if (best.first == kNone) return;
-    queue.push({best.second, slot, best.first, version[slot], version[best.first]});
+  auto push = [&](const Candidate& candidate) {
+    queue.push(candidate);
     ++counted.queue_entries;
+  };
+
+  auto set_partner = [&](std::uint32_t slot, std::uint32_t best, double distance) {
+    partner[slot] = best;
+    partner_distance[slot] = distance;
+    if (best == kNone) return;
+    partner_of[best].push_back(slot);
+    push({distance, slot, best, version[slot], version[best]});
   };
   std::vector<std::pair<std::uint32_t, double>> stack;
   auto search_partner = [&](std::uint32_t slot) {
     ++counted.partner_searches;
-    queue_partner(slot, tree.best_partner(slot, spheres[slot], options.pair_distance, stack));
+    const auto [best, distance] = tree.best_partner(slot, spheres[slot], options.pair_distance, stack);
+    set_partner(slot, best, distance);
   };
   {
     // The first searches are independent: in parallel, then queued in slot order.
@@ -302,7 +311,7 @@ std::vector<std::vector<Sphere>> merge_spheres(std::span<const Sphere> input, st
         first[slot] = tree.best_partner(slot, spheres[slot], options.pair_distance, scratch);
     });
     counted.partner_searches += count;
-    for (std::uint32_t slot = 0; slot < count; ++slot) queue_partner(slot, first[slot]);
+    for (std::uint32_t slot = 0; slot < count; ++slot) set_partner(slot, first[slot].first, first[slot].second);
   }
 
   // Levels from the most spheres to the fewest; each snapshot goes to every equal target.
@@ -311,25 +320,23 @@ std::vector<std::vector<Sphere>> merge_spheres(std::span<const Sphere> input, st
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
   std::vector<std::vector<Sphere>> result(targets.size());
 
-  // Invariant: the smallest key of an entry whose sphere a is unchanged is at most the
-  // smallest pair distance. Every live sphere has such an entry from its last search,
-  // whose key is at most its distance to each sphere unchanged since; a pair with a sphere
-  // changed later is covered by that sphere's own search, made when it changed. So the
-  // entry on top is either a pair at the smallest distance (both unchanged), or a sphere
-  // whose partner changed and which searches again (lazily, only when its lower bound
-  // comes up, instead of whenever its partner changes).
+  // Invariant: the smallest valid key in the queue is at most the smallest pair distance.
+  // Every live sphere's entry has a key at most its distance to each sphere unchanged since
+  // its last search; pairs with a newer sphere are covered by the newer one's search.
   std::size_t live = count;
+  std::vector<std::uint32_t> affected;
   for (const std::size_t level : levels) {
     while (live > level) {
       assert(!queue.empty());
       const Candidate top = queue.top();
       queue.pop();
       ++counted.queue_pops;
-      if (!alive[top.a] || version[top.a] != top.version_a) continue;  // superseded by a newer search
-      if (!alive[top.b] || version[top.b] != top.version_b) {
-        search_partner(top.a);
+      if (!alive[top.a] || version[top.a] != top.version_a) continue;
+      if (top.b == kNone) {  // a partner changed and could not be kept: search now
+        if (partner[top.a] == kNone) search_partner(top.a);
         continue;
       }
+      if (!alive[top.b] || version[top.b] != top.version_b) continue;
       const Sphere merged = merge_two_spheres(spheres[top.a], spheres[top.b], options.radius);
       // The merged sphere takes the larger one's slot (it stays near that leaf's region).
       const bool keep_a = spheres[top.a].radius > spheres[top.b].radius ||
@@ -340,17 +347,43 @@ std::vector<std::vector<Sphere>> merge_spheres(std::span<const Sphere> input, st
       ++version[gone];
       tree.remove(gone);
       --live;
-      // A sphere that holds the other absorbs it unchanged: its version stays, so the
-      // entries of the spheres that chose it stay valid (one huge sphere among many small
-      // ones would otherwise send all of them searching again at every merge). It searches
-      // again only if this entry was its own.
+      // A sphere that holds the other absorbs it unchanged: it keeps its version, so the
+      // entries of the spheres that chose it stay valid, and only the spheres that chose
+      // the absorbed one are affected (one huge sphere among many small ones would
+      // otherwise send all of them to look again at every merge: quadratic).
       const bool changed = merged.radius != spheres[keep].radius || merged.center != spheres[keep].center;
+      const bool keep_searches = changed || partner[keep] == gone;
       if (changed) {
         spheres[keep] = merged;
         ++version[keep];
         tree.update(keep, merged);
       }
-      if (changed || keep == top.a) search_partner(keep);
+
+      // Spheres whose partner was one of the two: if the merged sphere is at least as close
+      // as their old partner was, it is their best (everything else was farther); otherwise
+      // they search again when their old distance, a lower bound, comes up in the queue.
+      affected.clear();
+      for (const std::uint32_t slot : partner_of[gone])
+        if (alive[slot] && slot != keep && partner[slot] == gone) affected.push_back(slot);
+      partner_of[gone].clear();
+      if (changed) {
+        for (const std::uint32_t slot : partner_of[keep])
+          if (alive[slot] && partner[slot] == keep) affected.push_back(slot);
+        partner_of[keep].clear();
+      }
+      std::sort(affected.begin(), affected.end());
+      affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+      if (keep_searches) search_partner(keep);
+      for (const std::uint32_t slot : affected) {
+        const double distance = SphereTree::pair_distance(spheres[slot], merged, options.pair_distance);
+        if (distance <= partner_distance[slot]) {
+          set_partner(slot, keep, distance);
+        } else {
+          push({partner_distance[slot], slot, kNone, version[slot], 0});
+          partner[slot] = kNone;
+          partner_distance[slot] = kInfinity;
+        }
+      }
     }
     std::vector<Sphere> snapshot;
     snapshot.reserve(live);

@@ -39,12 +39,14 @@ struct MergeSpheresStatistics {
 ///
 /// Every sphere remembers its best partner, found with a k-d tree over the centres that
 /// also bounds the radii below each node (so D2's lower bounds prune too); candidate pairs
-/// wait in a priority queue. A sphere searches again only when its own entry comes up and
-/// its partner has changed meanwhile, and after a merge only the merged sphere searches; a
-/// sphere that holds the one it absorbs does not change, so nobody has to search because of
-/// it. About O(n log n) for n spheres when radii vary moderately (`statistics`, if given,
-/// receives the searches and queue operations). Deterministic: ties go to the lower index,
-/// nothing depends on addresses or thread scheduling.
+/// wait in a priority queue and are re-examined only when one of the two has changed, and
+/// only the merged sphere and the spheres whose partner was merged search again. A sphere
+/// that holds the one it absorbs does not change, so the spheres that chose it keep their
+/// entries. The searches and queue operations are O(n) (`statistics`, if given, receives
+/// them), each search about O(log n) node visits when radii vary moderately; from a ball
+/// that holds most others and empties around its centre as it absorbs them, a search is a
+/// nearest-neighbour query from inside a hollow and visits up to O(n^(2/3)). Deterministic: ties go to the
+/// lower index, nothing depends on addresses or thread scheduling.
 ///
 /// Preconditions (InvalidInputError, empty file name): every target is at least 1 and at
 /// most spheres.size(); radii are finite and non-negative, centres finite.
