@@ -113,15 +113,18 @@ TEST(CheckSpheresInside, BallHoldingWholeTrianglesFails) {
   EXPECT_FALSE(inside(cube, {{0.5, 0.5, 0.5}, 0.9}));
   EXPECT_FALSE(inside(cube, {{0.5, 0.5, 0.5}, 0.6}));  // pokes through every face
   // A cavity: a small inverted tetrahedron (a second component) inside the cube. A ball
-  // that swallows it holds points of winding number 0; one beside it is fine.
+  // whose centre is in the solid and that swallows the cavity holds points of winding
+  // number 0, though its sphere meets no triangle; one beside the cavity is fine.
   TriangleMesh hollow = testing::unit_cube();
   TriangleMesh cavity = testing::tetrahedron();
-  for (Vertex& p : cavity.positions) p = 0.1 * p + Vertex(0.45, 0.45, 0.45);
+  for (Vertex& p : cavity.positions) p = 0.06 * p + Vertex(0.5, 0.5, 0.5);
   for (Triangle& t : cavity.triangles) std::swap(t[1], t[2]);
   append_mesh(hollow, cavity);
-  EXPECT_FALSE(inside(hollow, {{0.5, 0.5, 0.5}, 0.3}));
+  const std::vector<Vertex> centre = {{0.42, 0.42, 0.42}};
+  ASSERT_EQ(locate_points(hollow, centre)[0], PointLocation::inside);
+  EXPECT_FALSE(inside(hollow, {centre[0], 0.3}));
   EXPECT_TRUE(inside(hollow, {{0.2, 0.2, 0.2}, 0.15}));
-  EXPECT_TRUE(inside(cube, {{0.5, 0.5, 0.5}, 0.3}));
+  EXPECT_TRUE(inside(cube, {centre[0], 0.3}));
 }
 
 // Closed but self-intersecting: two overlapping cubes as one mesh. The solid is where the
