@@ -285,16 +285,21 @@ struct RenderWorld::Impl {
     return ray.tfar == -std::numeric_limits<float>::infinity();
   }
 
-  // Whether every light lies outside the solid of `solid_world` (a closed mesh in world
-  // space) by more than `margin`: no light triangle comes within the margin of its surface,
-  // so each stays in one region of constant winding number, and every light vertex has
-  // winding number 0.
-  bool lights_outside(const TriangleMesh& solid_world, double margin) const {
+  // Whether every light lies outside the solid of `solid` (a closed mesh, placed in the
+  // world by `transform`) by more than `margin`: no light triangle comes within the margin
+  // of its surface, so each stays in one region of constant winding number, and every
+  // light vertex has winding number 0. Lights beyond the solid's box need no more.
+  bool lights_outside(const TriangleMesh& solid, const Eigen::Affine3d& transform, double margin) const {
     if (lights_world.triangles.empty()) return true;
-    BoundingBox lights_box = bounding_box(lights_world), solid_box = bounding_box(solid_world);
-    if ((lights_box.max.array() + margin < solid_box.min.array()).any() ||
+    const BoundingBox local = bounding_box(solid), lights_box = bounding_box(lights_world);
+    BoundingBox solid_box;
+    for (int corner = 0; corner < 8 && !local.empty(); ++corner)
+      solid_box.extend(transform * Vertex(corner & 1 ? local.max.x() : local.min.x(), corner & 2 ? local.max.y() : local.min.y(),
+                                          corner & 4 ? local.max.z() : local.min.z()));
+    if (solid_box.empty() || (lights_box.max.array() + margin < solid_box.min.array()).any() ||
         (lights_box.min.array() - margin > solid_box.max.array()).any())
       return true;
+    const TriangleMesh solid_world = transformed_mesh(solid, transform);
     if (!check_edge_balance(solid_world).balanced()) return false;
     if (!surfaces_clear_by(lights_world, solid_world, margin)) return false;
     const std::vector<PointLocation> locations = locate_points(solid_world, lights_world.positions);
@@ -328,10 +333,12 @@ PreparedProxy prepare_proxy(const InstanceProxy& p, const SceneMesh& mesh, doubl
   if (prepared.kind != ProxyKind::inside) prepared.polytope = ConvexPolytope::from_mesh(p.mesh);
   if (prepared.polytope || prepared.kind == ProxyKind::general) return prepared;
   if (prepared.kind == ProxyKind::outside) {
-    // Convex with many planes: scaled about its centre, which holds the whole proxy pushed
-    // out by `pad` (a convex body holding a ball of radius r about c holds, scaled by
-    // 1 + pad / r about c, every point within pad of it).
-    if (const std::optional<ConvexPolytope> many = ConvexPolytope::from_mesh(p.mesh, p.mesh.triangles.size())) {
+    // Convex with many planes (up to 16 384 triangles: the plane test is quadratic):
+    // scaled about its centre, which holds the whole proxy pushed out by `pad` (a convex
+    // body holding a ball of radius r about c holds, scaled by 1 + pad / r about c, every
+    // point within pad of it).
+    if (const std::optional<ConvexPolytope> many =
+            p.mesh.triangles.size() <= 16384 ? ConvexPolytope::from_mesh(p.mesh, p.mesh.triangles.size()) : std::nullopt) {
       const std::vector<Vertex> points = used_positions(p.mesh);
       Vertex center = Vertex::Zero();
       for (const Vertex& v : points) center += v / static_cast<double>(points.size());
@@ -457,12 +464,12 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     };
     // An outside proxy traced as a surface proves a miss only with every light outside it.
     auto traced_outside_usable = [&](const PreparedProxy& prepared) {
-      return prepared.polytope || w.lights_outside(transformed_mesh(prepared.mesh, instance.transform), pad_world);
+      return prepared.polytope || w.lights_outside(prepared.mesh, instance.transform, pad_world);
     };
     // An inside proxy proves a hit only with every light outside the mesh's solid.
     std::optional<bool> lights_outside_mesh;
     auto inside_usable = [&]() {
-      if (!lights_outside_mesh) lights_outside_mesh = w.lights_outside(transformed_mesh(mesh.mesh, instance.transform), pad_world);
+      if (!lights_outside_mesh) lights_outside_mesh = w.lights_outside(mesh.mesh, instance.transform, pad_world);
       return *lights_outside_mesh;
     };
 

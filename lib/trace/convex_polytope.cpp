@@ -22,6 +22,27 @@ std::optional<ConvexPolytope> ConvexPolytope::from_mesh(const TriangleMesh& mesh
   const double tolerance = 1e-9 * diagonal;
   const std::vector<Vertex> points = used_positions(mesh);
 
+  // Convex at every edge first (linear time): the neighbour's far vertex behind the plane.
+  // It rejects most non-convex meshes before the quadratic work below.
+  {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;  // (from << 32 | to, triangle)
+    edges.reserve(3 * mesh.triangles.size());
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        edges.emplace_back((std::uint64_t{mesh.triangles[t][k]} << 32) | mesh.triangles[t][(k + 1) % 3], t);
+    std::sort(edges.begin(), edges.end());
+    for (const auto& [key, t] : edges) {
+      const std::uint64_t twin = (key << 32) | (key >> 32);
+      const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair<std::uint64_t, std::uint32_t>(twin, 0));
+      if (it == edges.end() || it->first != twin) return std::nullopt;
+      const Triangle& a = mesh.triangles[t];
+      const Vertex n = (mesh.positions[a[1]] - mesh.positions[a[0]]).cross(mesh.positions[a[2]] - mesh.positions[a[0]]);
+      if (n.norm() <= 1e-12 * diagonal * diagonal) continue;
+      for (const VertexIndex v : mesh.triangles[it->second])
+        if (n.normalized().dot(mesh.positions[v] - mesh.positions[a[0]]) > tolerance) return std::nullopt;
+    }
+  }
+
   ConvexPolytope polytope;
   double signed_volume = 0;
   for (const Triangle& t : mesh.triangles) {

@@ -62,5 +62,42 @@ TEST(ConvexPolytope, TransformedSolidMatchesTheSlabTestInItsOwnFrame) {
   EXPECT_LT(met, 18000);
 }
 
+// Pushed out for rounding bounds: the grown solid holds points within the distance, and its
+// inner distance from the centre grows by it.
+TEST(ConvexPolytope, GrownSolidHoldsItsNeighbourhood) {
+  const ConvexPolytope cube = *ConvexPolytope::from_mesh(unit_cube());
+  const ConvexPolytope grown = cube.grown(0.1);
+  EXPECT_FALSE(cube.meets_segment({1.05, 0.5, 0.5}, {1.08, 0.5, 0.5}));
+  EXPECT_TRUE(grown.meets_segment({1.05, 0.5, 0.5}, {1.08, 0.5, 0.5}));
+  EXPECT_FALSE(grown.meets_segment({1.11, 0.5, 0.5}, {1.2, 0.5, 0.5}));
+  EXPECT_NEAR(cube.inner_distance({0.5, 0.5, 0.5}), 0.5, 1e-8);
+  EXPECT_NEAR(grown.inner_distance({0.5, 0.5, 0.5}), 0.6, 1e-8);
+  EXPECT_LT(cube.inner_distance({2, 0.5, 0.5}), 0.0);
+}
+
+// A cube with its top dented inwards is closed, manifold and oriented, but not convex at
+// the dent's edges: rejected before any plane is collected.
+TEST(ConvexPolytope, DentedCubeIsNotConvex) {
+  TriangleMesh dented = unit_cube();
+  const BoundingBox box = bounding_box(dented);
+  ASSERT_EQ(box.max.z(), 1.0);
+  // Split every top triangle at its centroid and push the new vertices down.
+  const std::size_t count = dented.triangles.size();
+  for (std::size_t t = 0; t < count; ++t) {
+    const Triangle triangle = dented.triangles[t];
+    bool top = true;
+    for (const VertexIndex v : triangle) top = top && dented.positions[v].z() == 1.0;
+    if (!top) continue;
+    const auto centre = static_cast<VertexIndex>(dented.positions.size());
+    dented.positions.push_back((dented.positions[triangle[0]] + dented.positions[triangle[1]] + dented.positions[triangle[2]]) / 3 -
+                               Vertex(0, 0, 0.3));
+    dented.triangles[t] = {triangle[0], triangle[1], centre};
+    dented.triangles.push_back({triangle[1], triangle[2], centre});
+    dented.triangles.push_back({triangle[2], triangle[0], centre});
+  }
+  EXPECT_FALSE(ConvexPolytope::from_mesh(dented, 64).has_value());
+  EXPECT_FALSE(ConvexPolytope::from_mesh(dented, dented.triangles.size()).has_value());
+}
+
 }  // namespace
 }  // namespace visproxy
