@@ -91,10 +91,7 @@ TEST(RenderWorld, LampInsideATracedOutsideProxyIsNotProvedFree) {
   EXPECT_TRUE(world.mesh_blocks(from, to, {.skip = 1, .only = -1}));
   EXPECT_TRUE(world.outside_blocks(from, to, {.skip = 1, .only = -1}));
   EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 0.0, 0.05);
-  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 5};
-  RenderOptions bounds = exact;
-  bounds.visibility = VisibilityMode::bounds;
-  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 2, .seed = 5});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
   EXPECT_EQ(b.stats.bounds_unoccluded, 0u);
   EXPECT_GT(b.stats.shadow_rays, 0u);
@@ -107,10 +104,8 @@ TEST(RenderWorld, LampInsideAClippedOutsideProxyMeetsItsSolid) {
   EXPECT_TRUE(world.notes().empty());
   EXPECT_EQ(world.stochastic_kind(1), ProxyKind::outside);  // a solid needs no light outside it
   EXPECT_TRUE(world.proxy_blocks({0.1, 0.2, -0.89}, {0.1, 0.1, 2.99}, {.skip = 1, .only = -1}));
-  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 5};
-  RenderOptions bounds = exact;
-  bounds.visibility = VisibilityMode::bounds;
-  EXPECT_EQ(render(s.scene, world, exact).image.pixels, render(s.scene, world, bounds).image.pixels);
+  const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 2, .seed = 5});
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
 }
 
 // A closed room (a box facing inwards) is a solid whose inside is its air: a ball in the
@@ -155,10 +150,7 @@ TEST(RenderWorld, ClosedRoomsInsideProxyProvesNothingAboutItsAir) {
   const Vertex from(0.2, 0.1, -1.99), to(0.3, 0.2, 2.89);
   EXPECT_FALSE(world.mesh_blocks(from, to));
   EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 1.0, 0.05);
-  const RenderOptions exact{.spp = 4, .shadow_rays = 4, .seed = 9};
-  RenderOptions bounds = exact;
-  bounds.visibility = VisibilityMode::bounds;
-  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 4, .seed = 9});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
   EXPECT_EQ(b.stats.bounds_occluded, 0u);
   EXPECT_GT(b.stats.bounds_traced, 0u);  // the bead's loose box sent segments to the exact test
@@ -231,10 +223,8 @@ TEST(RenderWorld, UnprovedProxiesAreGeneral) {
   EXPECT_FALSE(world.proxy_blocks(from, to, {.skip = 0, .only = -1}));
   EXPECT_TRUE(world.outside_blocks(from, to, {.skip = 0, .only = -1}));  // the ball's own mesh stands in
   EXPECT_NEAR(mean_estimate(world, from, to, 0, world.stochastic_kind(0)), 0.0, 0.05);
-  const RenderOptions exact{.spp = 4, .shadow_rays = 2, .seed = 3};
-  RenderOptions bounds = exact;
-  bounds.visibility = VisibilityMode::bounds;
-  EXPECT_EQ(render(scene, world, exact).image.pixels, render(scene, world, bounds).image.pixels);
+  const auto [a, b] = testing::exact_and_bounds(scene, world, {.spp = 4, .shadow_rays = 2, .seed = 3});
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
 }
 
 // Rounding to float: an inside ball that touches its mesh (the exact proof allows it) is
@@ -333,9 +323,7 @@ TEST(RenderWorld, SceneFarFromTheOriginRendersAsAtTheOrigin) {
   }
   EXPECT_GT(total, 0.0);
   EXPECT_LT(difference, 1e-3 * total) << difference << " of " << total;
-  RenderOptions bounds = options;
-  bounds.visibility = VisibilityMode::bounds;
-  EXPECT_EQ(render(far, far_world, bounds).image.pixels, b.pixels);
+  EXPECT_EQ(testing::exact_and_bounds(far, far_world, options).second.image.pixels, b.pixels);
 }
 
 // Without ray masks every hit goes through the filter function: the same images.

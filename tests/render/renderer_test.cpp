@@ -183,10 +183,7 @@ TEST(Renderer, BoundsIsExactWithInsideProofsSharedMaskBitsAndSquashedInstances) 
   ASSERT_GT(s.scene.instances.size(), 31u);
   const RenderWorld world(s.scene, s.proxies);
   EXPECT_TRUE(world.notes().empty()) << world.notes().front();
-  const RenderOptions exact{.spp = 4, .shadow_rays = 3, .seed = 17};
-  RenderOptions bounds = exact;
-  bounds.visibility = VisibilityMode::bounds;
-  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, bounds);
+  const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 3, .seed = 17});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
   EXPECT_GT(b.stats.bounds_occluded, 100u);
   EXPECT_GT(b.stats.bounds_unoccluded, 100u);
