@@ -91,7 +91,7 @@ ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const jso
     return geometry;
   }
   geometry.type = type == "box" ? PrimitiveType::box : PrimitiveType::triangle;
-  geometry.mesh = read_mesh(path, {.weld = Weld::never});
+  geometry.mesh = read_mesh(path, {.weld = Weld::never, .on_warning = {}});
   const std::size_t expected = entry.value("triangles", geometry.mesh.triangles.size());
   if (geometry.mesh.triangles.size() != expected)
     throw InvalidInputError(path, "holds " + std::to_string(geometry.mesh.triangles.size()) +

@@ -67,7 +67,7 @@ TEST_F(CliVerifyMeasure, EveryClaimHoldsAndIsRecorded) {
 // pokes out of the proxy. For the wrap, one vertex pushed just beneath the mesh's surface:
 // its triangles cross the mesh while every mesh vertex stays inside. Both must fail, naming the proxy and the counterexample.
 TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
-  TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never, .on_warning = {}});
   const BoundingBox box = bounding_box(hull);
   const Vertex centre = 0.5 * (box.min + box.max);
   hull.positions[0] = centre + 0.97 * (hull.positions[0] - centre);
@@ -77,7 +77,7 @@ TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
   const Triangle& t = mesh.triangles[100];
   const Vertex a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
   const Vertex inside = (a + b + c) / 3 - 1e-3 * box.diagonal() * (b - a).cross(c - a).normalized();
-  TriangleMesh wrap = read_mesh(proxies_ / "wrap.ply", {.weld = Weld::never});
+  TriangleMesh wrap = read_mesh(proxies_ / "wrap.ply", {.weld = Weld::never, .on_warning = {}});
   std::size_t nearest = 0;
   for (std::size_t v = 0; v < wrap.positions.size(); ++v)
     if ((wrap.positions[v] - inside).norm() < (wrap.positions[nearest] - inside).norm()) nearest = v;
