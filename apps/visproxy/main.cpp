@@ -7,6 +7,12 @@
 #include "commands.h"
 #include "core/errors.h"
 
+namespace visproxy::cli {
+
+void print_warning(const std::string& warning) { std::cerr << "visproxy: warning: " << warning << "\n"; }
+
+}  // namespace visproxy::cli
+
 int main(int argc, char** argv) {
   using namespace visproxy::cli;
   CLI::App app{"visproxy: visibility proxies for shadow rays (build, verify, measure, validate)", "visproxy"};

@@ -49,8 +49,9 @@ void write_manifest(const std::filesystem::path& folder, const json& manifest) {
   write_file_atomically(folder / "manifest.json", manifest.dump(2) + "\n");
 }
 
-TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& manifest) {
-  TriangleMesh mesh = read_mesh(path, {.weld = weld_of(manifest)});
+TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& manifest,
+                                const WarningHandler& on_warning) {
+  TriangleMesh mesh = read_mesh(path, {.weld = weld_of(manifest), .on_warning = on_warning});
   const json& described = manifest.at("mesh");
   const auto vertices = described.at("vertices").get<std::size_t>();
   const auto triangles = described.at("triangles").get<std::size_t>();

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "core/errors.h"
 #include "mesh/sphere_set.h"
 #include "mesh/triangle_mesh.h"
 #include "proxy/build_proxies.h"
@@ -21,8 +22,9 @@ void write_manifest(const std::filesystem::path& folder, const nlohmann::json& m
 
 /// Reads the mesh at `path` as `visproxy build` did (same welding) and checks it is the
 /// one the manifest describes: same vertex and triangle counts and bounding box. Throws
-/// InvalidInputError naming `path` otherwise.
-TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest);
+/// InvalidInputError naming `path` otherwise. The reader's warnings go to `on_warning`.
+TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest,
+                                const WarningHandler& on_warning = {});
 
 /// One proxy's geometry: triangles (boxes and meshes) or spheres.
 struct ProxyGeometry {

@@ -143,7 +143,7 @@ std::filesystem::path cgal_demo_mesh_dir() {
   return VISPROXY_DEFAULT_MESH_DIR;
 }
 
-Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
+Scene parse_scene(const std::string& text, const std::filesystem::path& path, const WarningHandler& on_warning) {
   const Parser p(path);
   const json document = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (document.is_discarded()) throw InvalidInputError(path, "not valid JSON");
@@ -165,7 +165,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
     if (value.contains("file")) {
       if (!value["file"].is_string()) p.fail(where, "\"file\" must be a string");
       mesh.file = p.mesh_path(value["file"].get<std::string>());
-      mesh.mesh = read_mesh(mesh.file);  // its own errors name the mesh file
+      // Its own errors name the mesh file.
+      mesh.mesh = read_mesh(mesh.file, {.weld = Weld::automatic, .on_warning = on_warning});
       if (mesh.mesh.triangles.empty()) throw InvalidInputError(mesh.file, "has no triangles");
     } else {
       mesh.mesh = p.inline_mesh(value, where);
@@ -248,6 +249,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
   return scene;
 }
 
-Scene load_scene(const std::filesystem::path& path) { return parse_scene(read_file(path), path); }
+Scene load_scene(const std::filesystem::path& path, const WarningHandler& on_warning) {
+  return parse_scene(read_file(path), path, on_warning);
+}
 
 }  // namespace visproxy
