@@ -26,7 +26,11 @@ Weld weld_of(const json& manifest) {
 
 json read_manifest(const std::filesystem::path& folder) {
   const std::filesystem::path path = folder / "manifest.json";
-  const json manifest = json::parse(read_file(path), nullptr, /*allow_exceptions=*/false);
+  return parse_manifest(read_file(path), path);
+}
+
+json parse_manifest(std::string_view text, const std::filesystem::path& path) {
+  const json manifest = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (manifest.is_discarded()) throw InvalidInputError(path, "not valid JSON");
   if (!manifest.is_object() || manifest.value("format", "") != "visproxy-manifest")
     throw InvalidInputError(path, "not a visproxy manifest (\"format\" is not \"visproxy-manifest\")");

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <string_view>
 #include <vector>
 
 #include "core/errors.h"
@@ -16,6 +17,9 @@ namespace visproxy {
 /// FOLDER/manifest.json, checked for the fields the commands rely on. Throws IOError when
 /// it cannot be read and InvalidInputError naming it when it is not a visproxy manifest.
 nlohmann::json read_manifest(const std::filesystem::path& folder);
+
+/// The same from the manifest's text; `path` names it in errors.
+nlohmann::json parse_manifest(std::string_view text, const std::filesystem::path& path);
 
 /// Writes FOLDER/manifest.json atomically (two-space indented, newline at the end).
 void write_manifest(const std::filesystem::path& folder, const nlohmann::json& manifest);

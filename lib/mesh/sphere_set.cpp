@@ -60,9 +60,10 @@ void write_sphere_set(const std::filesystem::path& path, const std::vector<Spher
   write_file_atomically(path, encode_sphere_set(spheres));
 }
 
-std::vector<Sphere> read_sphere_set(const std::filesystem::path& path) {
-  const std::string bytes = read_file(path);
-  const nlohmann::json document = nlohmann::json::parse(bytes, nullptr, /*allow_exceptions=*/false);
+std::vector<Sphere> read_sphere_set(const std::filesystem::path& path) { return parse_sphere_set(read_file(path), path); }
+
+std::vector<Sphere> parse_sphere_set(std::string_view text, const std::filesystem::path& path) {
+  const nlohmann::json document = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (document.is_discarded()) throw InvalidInputError(path, "not valid JSON");
   if (!document.is_object() || !document.contains("spheres") || !document["spheres"].is_array())
     throw InvalidInputError(path, "expected an object with a \"spheres\" array");

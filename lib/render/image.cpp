@@ -1,5 +1,6 @@
 #include "render/image.h"
 
+#include <IexBaseExc.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -30,6 +31,26 @@ void append_png(png_structp png, png_bytep data, png_size_t length) {
   static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), length);
 }
 
+// OpenEXR's input from bytes in memory.
+class MemoryStream final : public Imf::IStream {
+ public:
+  MemoryStream(std::string_view bytes, const std::filesystem::path& path) : Imf::IStream(path.c_str()), bytes_(bytes) {}
+
+  bool read(char c[], int n) override {
+    if (n < 0 || position_ > bytes_.size() || bytes_.size() - position_ < static_cast<std::uint64_t>(n))
+      throw Iex::InputExc("unexpected end of file");
+    std::memcpy(c, bytes_.data() + position_, static_cast<std::size_t>(n));
+    position_ += static_cast<std::uint64_t>(n);
+    return position_ < bytes_.size();
+  }
+  std::uint64_t tellg() override { return position_; }
+  void seekg(std::uint64_t position) override { position_ = position; }  // read() checks it
+
+ private:
+  std::string_view bytes_;
+  std::uint64_t position_ = 0;
+};
+
 }  // namespace
 
 void write_pfm(const std::filesystem::path& path, const Image& image) {
@@ -47,9 +68,10 @@ void write_pfm(const std::filesystem::path& path, const Image& image) {
   write_file_atomically(path, bytes);
 }
 
-Image read_pfm(const std::filesystem::path& path) {
-  const std::string bytes = read_file(path);
-  std::istringstream header(bytes);
+Image read_pfm(const std::filesystem::path& path) { return parse_pfm(read_file(path), path); }
+
+Image parse_pfm(std::string_view bytes, const std::filesystem::path& path) {
+  std::istringstream header{std::string(bytes)};
   std::string magic;
   int width = 0, height = 0;
   double scale = 0;
@@ -107,11 +129,11 @@ void write_exr(const std::filesystem::path& path, const Image& image) {
   write_file_atomically(path, bytes);
 }
 
-Image read_exr(const std::filesystem::path& path) {
-  const std::string bytes = read_file(path);
+Image read_exr(const std::filesystem::path& path) { return parse_exr(read_file(path), path); }
+
+Image parse_exr(std::string_view bytes, const std::filesystem::path& path) {
   try {
-    Imf::StdISStream stream;
-    stream.str(bytes);
+    MemoryStream stream(bytes, path);
     Imf::InputFile file(stream, 1);
     const Imath::Box2i window = file.header().dataWindow();
     const long width = static_cast<long>(window.max.x) - window.min.x + 1, height = static_cast<long>(window.max.y) - window.min.y + 1;

@@ -3,6 +3,7 @@
 // between two.
 
 #include <filesystem>
+#include <string_view>
 #include <vector>
 
 #include "scene/scene.h"
@@ -27,12 +28,16 @@ struct Image {
 void write_pfm(const std::filesystem::path& path, const Image& image);
 /// Reads a colour PFM of either byte order; throws InvalidInputError naming the file.
 Image read_pfm(const std::filesystem::path& path);
+/// The same from the file's bytes; `path` names it in errors.
+Image parse_pfm(std::string_view bytes, const std::filesystem::path& path);
 
 /// OpenEXR, scanlines of 32-bit float R, G, B channels, ZIP-compressed (lossless).
 void write_exr(const std::filesystem::path& path, const Image& image);
 /// Reads the R, G and B channels of an OpenEXR image (any pixel type; missing channels
 /// read as 0); throws InvalidInputError naming the file.
 Image read_exr(const std::filesystem::path& path);
+/// The same from the file's bytes, through an Imf::IStream over them; `path` names it in errors.
+Image parse_exr(std::string_view bytes, const std::filesystem::path& path);
 
 /// Whether the linear formats know this extension (".pfm", ".exr").
 bool is_linear_image_path(const std::filesystem::path& path);
