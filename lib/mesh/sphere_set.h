@@ -26,8 +26,8 @@ std::string encode_sphere_set(const std::vector<Sphere>& spheres);
 void write_sphere_set(const std::filesystem::path& path, const std::vector<Sphere>& spheres);
 
 /// Reads a sphere-set file. Throws IOError when it cannot be read and InvalidInputError
-/// naming the file when it is not valid JSON of the shape above, or a centre or radius is
-/// not finite, or a radius is negative.
+/// naming the file and the JSON path at fault ("spheres[3].radius: must not be negative")
+/// when it is not valid JSON of the shape above or a radius is negative.
 std::vector<Sphere> read_sphere_set(const std::filesystem::path& path);
 
 /// The same from the file's text; `path` names it in errors.
