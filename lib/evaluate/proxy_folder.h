@@ -14,8 +14,13 @@
 
 namespace visproxy {
 
-/// FOLDER/manifest.json, checked for the fields the commands rely on. Throws IOError when
-/// it cannot be read and InvalidInputError naming it when it is not a visproxy manifest.
+/// FOLDER/manifest.json, checked for the fields read_manifest_mesh, read_proxy_geometry,
+/// entry_kind and the commands' summaries read: format and format_version; generator (if
+/// present); mesh.path, vertices, triangles, bbox.min and bbox.max, weld (if present);
+/// options; each entry's name, kind, file, primitive_type, primitives and triangles (if
+/// present). Throws IOError when it cannot be read and InvalidInputError naming it and the
+/// JSON path at fault ("manifest.json: proxies[2].kind: must be ...") otherwise. The
+/// measure, verify and error objects the report reads are not checked.
 nlohmann::json read_manifest(const std::filesystem::path& folder);
 
 /// The same from the manifest's text; `path` names it in errors.
