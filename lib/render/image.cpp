@@ -11,9 +11,9 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <cstring>
-#include <sstream>
 
 #include "core/errors.h"
 #include "core/files.h"
@@ -29,6 +29,12 @@ std::uint8_t srgb_byte(double linear) {
 
 void append_png(png_structp png, png_bytep data, png_size_t length) {
   static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), length);
+}
+
+bool is_pfm_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::string not_finite_pixel(std::size_t x, std::size_t y) {
+  return "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is not finite";
 }
 
 // OpenEXR's input from bytes in memory.
@@ -71,19 +77,35 @@ void write_pfm(const std::filesystem::path& path, const Image& image) {
 Image read_pfm(const std::filesystem::path& path) { return parse_pfm(read_file(path), path); }
 
 Image parse_pfm(std::string_view bytes, const std::filesystem::path& path) {
-  std::istringstream header{std::string(bytes)};
-  std::string magic;
-  int width = 0, height = 0;
+  // "PF", width, height and scale separated by whitespace, then one whitespace byte and the
+  // pixels: rows bottom to top, float RGB, little-endian when the scale is negative.
+  std::size_t position = 0;
+  auto token = [&] {
+    while (position < bytes.size() && is_pfm_space(bytes[position])) ++position;
+    const std::size_t start = position;
+    while (position < bytes.size() && !is_pfm_space(bytes[position])) ++position;
+    return bytes.substr(start, position - start);
+  };
+  if (token() != "PF") throw InvalidInputError(path, "not a colour PFM image (it does not start with \"PF\")");
+  int size[2] = {0, 0};
+  for (int& extent : size) {
+    const std::string_view text = token();
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), extent);
+    if (error != std::errc() || end != text.data() + text.size() || extent < 1 || extent > 65536)
+      throw InvalidInputError(path, "bad image size (expected a width and a height from 1 to 65536)");
+  }
+  const std::string_view scale_text = token();
   double scale = 0;
-  header >> magic >> width >> height >> scale;
-  if (!header || magic != "PF") throw InvalidInputError(path, "not a colour PFM image (expected \"PF\", width, height, scale)");
-  if (width <= 0 || height <= 0 || width > 65536 || height > 65536) throw InvalidInputError(path, "bad image size");
-  const auto start = static_cast<std::size_t>(header.tellg()) + 1;  // one whitespace byte after the scale
+  const auto [end, error] = std::from_chars(scale_text.data(), scale_text.data() + scale_text.size(), scale);
+  if (error != std::errc() || end != scale_text.data() + scale_text.size() || !std::isfinite(scale) || scale == 0)
+    throw InvalidInputError(path, "bad scale (expected a non-zero number, negative for little-endian pixels)");
+  const int width = size[0], height = size[1];
   const std::size_t needed = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 12;
-  if (bytes.size() < start + needed) throw InvalidInputError(path, "truncated: fewer pixels than the header says");
+  if (position == bytes.size() || bytes.size() - position - 1 < needed)
+    throw InvalidInputError(path, "truncated: fewer pixels than the header says");
   const bool little = scale < 0;
   Image image(width, height);
-  const char* data = bytes.data() + start;
+  const char* data = bytes.data() + position + 1;  // past the one whitespace byte after the scale
   for (int y = height - 1; y >= 0; --y)
     for (int x = 0; x < width; ++x)
       for (int c = 0; c < 3; ++c) {
@@ -93,6 +115,7 @@ Image parse_pfm(std::string_view bytes, const std::filesystem::path& path) {
         if (little != (std::endian::native == std::endian::little)) raw = __builtin_bswap32(raw);
         float value;
         std::memcpy(&value, &raw, 4);
+        if (!std::isfinite(value)) throw InvalidInputError(path, not_finite_pixel(x, y));
         image.at(x, y)[c] = value;
       }
   return image;

@@ -26,7 +26,9 @@ struct Image {
 /// Portable float map, little-endian RGB (scale -1), rows bottom to top as the format
 /// requires. Values are stored as float.
 void write_pfm(const std::filesystem::path& path, const Image& image);
-/// Reads a colour PFM of either byte order; throws InvalidInputError naming the file.
+/// Reads a colour PFM of either byte order: "PF", width and height (1 to 65536), a non-zero
+/// scale (negative: little-endian), one whitespace byte, the pixels. Throws InvalidInputError
+/// naming the file when the header is malformed, pixels are missing or one is not finite.
 Image read_pfm(const std::filesystem::path& path);
 /// The same from the file's bytes; `path` names it in errors.
 Image parse_pfm(std::string_view bytes, const std::filesystem::path& path);

@@ -1,0 +1,94 @@
+#include "render/image.h"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "core/errors.h"
+#include "core/files.h"
+#include "test_support.h"
+
+namespace visproxy {
+namespace {
+
+// A small image whose values are exact in float.
+Image sample_image(int width, int height) {
+  Image image(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) image.at(x, y) = Color(0.25 * x, 0.5 * y, 0.125 * (x + y) + 1);
+  return image;
+}
+
+// Floats in the byte order `big` names.
+std::string floats(std::initializer_list<float> values, bool big) {
+  std::string bytes;
+  for (float value : values) {
+    std::uint32_t raw;
+    std::memcpy(&raw, &value, 4);
+    if (big == (std::endian::native == std::endian::little)) raw = __builtin_bswap32(raw);
+    bytes.append(reinterpret_cast<const char*>(&raw), 4);
+  }
+  return bytes;
+}
+
+// The message parse_pfm gives, or "accepted".
+std::string pfm_error(const std::string& bytes) {
+  try {
+    parse_pfm(bytes, "image.pfm");
+    return "accepted";
+  } catch (const InvalidInputError& error) {
+    return error.what();
+  }
+}
+
+using ImageFile = testing::ScratchFolder;
+
+TEST_F(ImageFile, PfmRoundTripsAndReadsFromMemory) {
+  const Image image = sample_image(3, 2);
+  write_pfm(folder_ / "image.pfm", image);
+  EXPECT_EQ(read_pfm(folder_ / "image.pfm").pixels, image.pixels);
+  EXPECT_EQ(parse_pfm(read_file(folder_ / "image.pfm"), "image.pfm").pixels, image.pixels);
+}
+
+TEST(ParsePfm, BigEndianAndSpacing) {
+  // A positive scale means big-endian; the bottom row comes first.
+  const Image image = parse_pfm("PF\n1   2\t1.0\n" + floats({1, 2, 3, 4, 5, 6}, true), "image.pfm");
+  ASSERT_EQ(image.width, 1);
+  ASSERT_EQ(image.height, 2);
+  EXPECT_EQ(image.at(0, 1), Color(1, 2, 3));
+  EXPECT_EQ(image.at(0, 0), Color(4, 5, 6));
+}
+
+TEST(ParsePfm, RejectsMalformedHeadersAndPixels) {
+  const std::string pixel = floats({1, 2, 3}, false);
+  EXPECT_EQ(pfm_error("Pf\n1 1\n-1.0\n" + pixel), "image.pfm: not a colour PFM image (it does not start with \"PF\")");
+  EXPECT_EQ(pfm_error("PF\n0 1\n-1.0\n" + pixel),
+            "image.pfm: bad image size (expected a width and a height from 1 to 65536)");
+  EXPECT_EQ(pfm_error("PF\n1 1.0\n-1.0\n" + pixel),
+            "image.pfm: bad image size (expected a width and a height from 1 to 65536)");
+  EXPECT_EQ(pfm_error("PF\n65537 1\n-1.0\n" + pixel),
+            "image.pfm: bad image size (expected a width and a height from 1 to 65536)");
+  EXPECT_EQ(pfm_error("PF\n1 1\n0\n" + pixel),
+            "image.pfm: bad scale (expected a non-zero number, negative for little-endian pixels)");
+  EXPECT_EQ(pfm_error("PF\n2 1\n-1.0\n" + pixel), "image.pfm: truncated: fewer pixels than the header says");
+  // A header that ends the file: the pixels are missing, not the header's own bytes.
+  EXPECT_EQ(pfm_error("PF\n1 1\n-1.000000000000"), "image.pfm: truncated: fewer pixels than the header says");
+  EXPECT_EQ(pfm_error("PF\n1 1\n-1.0\n" + floats({1, std::numeric_limits<float>::infinity(), 3}, false)),
+            "image.pfm: pixel (0, 0) is not finite");
+}
+
+// fuzz_readers (minimised): a height of "1.0" was read as 1 with the scale ".0", and a NaN
+// pixel was accepted.
+TEST(ParsePfm, FuzzFinding) {
+  const std::string bytes("PF\n2 1.0\n\0\xff\xff\xff\xff\0\0A\0\0\0?\xff\0\0\0\0A\0\0\0??", 33);
+  EXPECT_NE(pfm_error(bytes), "accepted");
+  EXPECT_EQ(pfm_error("PF\n2 1\n1.0\n" + floats({1, 2, 3, std::nanf(""), 0, 0}, true)),
+            "image.pfm: pixel (1, 0) is not finite");
+}
+
+}  // namespace
+}  // namespace visproxy
