@@ -174,7 +174,13 @@ Image parse_exr(std::string_view bytes, const std::filesystem::path& path) {
     file.readPixels(window.min.y, window.max.y);
     Image image(static_cast<int>(width), static_cast<int>(height));
     for (std::size_t i = 0; i < count; ++i)
-      for (std::size_t c = 0; c < 3; ++c) image.pixels[i][static_cast<int>(c)] = planes[c * count + i];
+      for (std::size_t c = 0; c < 3; ++c) {
+        const float value = planes[c * count + i];
+        if (!std::isfinite(value))
+          throw InvalidInputError(
+              path, not_finite_pixel(i % static_cast<std::size_t>(width), i / static_cast<std::size_t>(width)));
+        image.pixels[i][static_cast<int>(c)] = value;
+      }
     return image;
   } catch (const InvalidInputError&) {
     throw;

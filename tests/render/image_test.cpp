@@ -90,5 +90,36 @@ TEST(ParsePfm, FuzzFinding) {
             "image.pfm: pixel (1, 0) is not finite");
 }
 
+// The message parse_exr gives, or "accepted".
+std::string exr_error(const std::string& bytes) {
+  try {
+    parse_exr(bytes, "image.exr");
+    return "accepted";
+  } catch (const InvalidInputError& error) {
+    return error.what();
+  }
+}
+
+TEST_F(ImageFile, ExrRoundTripsAndReadsFromMemory) {
+  const Image image = sample_image(5, 3);
+  write_exr(folder_ / "image.exr", image);
+  EXPECT_EQ(read_exr(folder_ / "image.exr").pixels, image.pixels);
+  const std::string bytes = read_file(folder_ / "image.exr");
+  EXPECT_EQ(parse_exr(bytes, "image.exr").pixels, image.pixels);
+  EXPECT_EQ(exr_error(bytes.substr(0, bytes.size() / 2)).rfind("image.exr: not a readable OpenEXR image: ", 0), 0u);
+  EXPECT_EQ(exr_error("not an image").rfind("image.exr: not a readable OpenEXR image: ", 0), 0u);
+}
+
+// fuzz_readers: an image holding NaN or infinity was accepted.
+TEST_F(ImageFile, ExrPixelsMustBeFinite) {
+  Image image = sample_image(4, 2);
+  image.at(3, 1) = Color(0, std::numeric_limits<double>::quiet_NaN(), 0);
+  write_exr(folder_ / "nan.exr", image);
+  EXPECT_EQ(exr_error(read_file(folder_ / "nan.exr")), "image.exr: pixel (3, 1) is not finite");
+  image.at(3, 1) = Color(0, 0, 1e39);  // beyond float: infinity once stored
+  write_exr(folder_ / "inf.exr", image);
+  EXPECT_EQ(exr_error(read_file(folder_ / "inf.exr")), "image.exr: pixel (3, 1) is not finite");
+}
+
 }  // namespace
 }  // namespace visproxy
