@@ -37,6 +37,47 @@ std::string not_finite_pixel(std::size_t x, std::size_t y) {
   return "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is not finite";
 }
 
+std::int32_t little_endian_int32(const char* bytes) {
+  std::uint32_t raw;
+  std::memcpy(&raw, bytes, 4);
+  if constexpr (std::endian::native == std::endian::big) raw = __builtin_bswap32(raw);
+  return static_cast<std::int32_t>(raw);
+}
+
+// OpenEXR allocates a header attribute's value at the size the file states before it reads
+// the value, so a few bytes can make it allocate two gigabytes. The headers are walked here
+// first as OpenEXR lays them out (name, type name, 32-bit size, value; an empty name ends a
+// header, an empty header ends the headers of a multi-part file), and every size is checked
+// against the bytes that follow.
+void check_exr_attribute_sizes(std::string_view bytes, const std::filesystem::path& path) {
+  auto fail = [&](const std::string& problem) {
+    throw InvalidInputError(path, "not a readable OpenEXR image: " + problem);
+  };
+  if (bytes.size() < 8 || little_endian_int32(bytes.data()) != 20000630) fail("no OpenEXR magic number");
+  const bool multipart = (little_endian_int32(bytes.data() + 4) & 0x1000) != 0;
+  std::size_t position = 8;
+  auto skip_name = [&] {  // true if the name is empty
+    const std::size_t end = bytes.find('\0', position);
+    if (end == std::string_view::npos) fail("the header is truncated");
+    const bool empty = end == position;
+    position = end + 1;
+    return empty;
+  };
+  for (;;) {
+    while (!skip_name()) {
+      skip_name();  // the type's
+      if (bytes.size() - position < 4) fail("the header is truncated");
+      const std::int32_t size = little_endian_int32(bytes.data() + position);
+      position += 4;
+      if (size < 0 || static_cast<std::uint64_t>(size) > bytes.size() - position)
+        fail("a header attribute claims " + std::to_string(size) + " bytes; " +
+             std::to_string(bytes.size() - position) + " follow it");
+      position += static_cast<std::size_t>(size);
+    }
+    if (!multipart || position >= bytes.size() || bytes[position] == '\0') return;
+  }
+}
+
 // OpenEXR's input from bytes in memory.
 class MemoryStream final : public Imf::IStream {
  public:
@@ -155,6 +196,7 @@ void write_exr(const std::filesystem::path& path, const Image& image) {
 Image read_exr(const std::filesystem::path& path) { return parse_exr(read_file(path), path); }
 
 Image parse_exr(std::string_view bytes, const std::filesystem::path& path) {
+  check_exr_attribute_sizes(bytes, path);
   try {
     MemoryStream stream(bytes, path);
     Imf::InputFile file(stream, 1);

@@ -121,5 +121,47 @@ TEST_F(ImageFile, ExrPixelsMustBeFinite) {
   EXPECT_EQ(exr_error(read_file(folder_ / "inf.exr")), "image.exr: pixel (3, 1) is not finite");
 }
 
+// The bytes of a 2 by 2 OpenEXR image with one more attribute at the end of its header. Its
+// one ZIP block (16 rows) moves by the attribute's size, and so does the offset to it.
+std::string exr_with_attribute(const std::filesystem::path& folder, const std::string& attribute) {
+  write_exr(folder / "base.exr", sample_image(2, 2));
+  std::string bytes = read_file(folder / "base.exr");
+  std::size_t position = 8;  // past the magic number and the version
+  for (;;) {                 // name, type, size, value, until the empty name ending the header
+    const std::size_t name_end = bytes.find('\0', position);
+    if (name_end == position) break;
+    position = bytes.find('\0', name_end + 1) + 1;
+    std::int32_t size;
+    std::memcpy(&size, bytes.data() + position, 4);  // little-endian, as on the machines visproxy runs on
+    position += 4 + static_cast<std::size_t>(size);
+  }
+  bytes.insert(position, attribute);
+  const std::size_t offset_table = position + attribute.size() + 1;  // after the header's empty name
+  std::uint64_t offset;
+  std::memcpy(&offset, bytes.data() + offset_table, 8);
+  offset += attribute.size();
+  std::memcpy(bytes.data() + offset_table, &offset, 8);
+  return bytes;
+}
+
+// fuzz_readers: an 88-byte file whose header holds an attribute of an unknown type claiming
+// 1633943552 bytes made OpenEXR allocate them before finding the file too short.
+TEST_F(ImageFile, ExrAttributeSizesAreCheckedBeforeOpenExrAllocates) {
+  const std::string claim = std::string("extra\0unknowntype\0", 18) + std::string("\x00\x00\x64\x61", 4) + "abcd";
+  EXPECT_EQ(exr_error(exr_with_attribute(folder_, claim))
+                .rfind("image.exr: not a readable OpenEXR image: a header attribute claims 1633943552 bytes; ", 0),
+            0u);
+  const std::string negative = std::string("extra\0unknowntype\0", 18) + std::string("\xff\xff\xff\xff", 4);
+  EXPECT_EQ(exr_error(exr_with_attribute(folder_, negative))
+                .rfind("image.exr: not a readable OpenEXR image: a header attribute claims -1 bytes; ", 0),
+            0u);
+  // An attribute OpenEXR does not know, of the size it claims, is read past.
+  const std::string fitting = std::string("extra\0unknowntype\0", 18) + std::string("\x04\x00\x00\x00", 4) + "abcd";
+  EXPECT_EQ(exr_error(exr_with_attribute(folder_, fitting)), "accepted");
+  EXPECT_EQ(exr_error(std::string("\x76\x2f\x31\x01\x02\x00\x00\x00channels", 16)),
+            "image.exr: not a readable OpenEXR image: the header is truncated");
+  EXPECT_EQ(exr_error("v/1"), "image.exr: not a readable OpenEXR image: no OpenEXR magic number");
+}
+
 }  // namespace
 }  // namespace visproxy
