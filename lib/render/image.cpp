@@ -7,6 +7,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStdIO.h>
+#include <openexr.h>
 #include <png.h>
 
 #include <algorithm>
@@ -37,44 +38,49 @@ std::string not_finite_pixel(std::size_t x, std::size_t y) {
   return "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is not finite";
 }
 
-std::int32_t little_endian_int32(const char* bytes) {
-  std::uint32_t raw;
-  std::memcpy(&raw, bytes, 4);
-  if constexpr (std::endian::native == std::endian::big) raw = __builtin_bswap32(raw);
-  return static_cast<std::int32_t>(raw);
-}
+// OpenEXR's C++ reader trusts the sizes a file's header states: it allocates an attribute
+// of an unknown type at its stated size before reading it, so a few bytes can make it take
+// two gigabytes, and it reads some known attributes by their content whatever size they
+// claim, so it may find attributes where none begin. OpenEXRCore, the library's C core,
+// checks every attribute's size against its content and the file; a header that its strict
+// check rejects is not given to the C++ reader.
+struct CoreInput {
+  std::string_view bytes;
+  std::string first_error;
+};
 
-// OpenEXR allocates a header attribute's value at the size the file states before it reads
-// the value, so a few bytes can make it allocate two gigabytes. The headers are walked here
-// first as OpenEXR lays them out (name, type name, 32-bit size, value; an empty name ends a
-// header, an empty header ends the headers of a multi-part file), and every size is checked
-// against the bytes that follow.
-void check_exr_attribute_sizes(std::string_view bytes, const std::filesystem::path& path) {
-  auto fail = [&](const std::string& problem) {
+void check_exr_headers(std::string_view bytes, const std::filesystem::path& path) {
+  CoreInput input{bytes, {}};
+  exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+  init.user_data = &input;
+  init.read_fn = [](exr_const_context_t, void* user_data, void* buffer, std::uint64_t size, std::uint64_t offset,
+                    exr_stream_error_func_ptr_t) -> std::int64_t {
+    const std::string_view all = static_cast<CoreInput*>(user_data)->bytes;
+    if (offset >= all.size()) return 0;
+    const std::size_t count = static_cast<std::size_t>(std::min<std::uint64_t>(size, all.size() - offset));
+    std::memcpy(buffer, all.data() + offset, count);
+    return static_cast<std::int64_t>(count);
+  };
+  init.size_fn = [](exr_const_context_t, void* user_data) -> std::int64_t {
+    return static_cast<std::int64_t>(static_cast<CoreInput*>(user_data)->bytes.size());
+  };
+  init.error_handler_fn = [](exr_const_context_t context, exr_result_t, const char* message) {
+    void* user_data = nullptr;
+    if (exr_get_user_data(context, &user_data) != EXR_ERR_SUCCESS || user_data == nullptr) return;
+    std::string& first = static_cast<CoreInput*>(user_data)->first_error;
+    if (first.empty() && message != nullptr) first = message;
+  };
+  init.flags = EXR_CONTEXT_FLAG_STRICT_HEADER;
+  init.max_image_width = init.max_image_height = 65536;
+  init.max_tile_width = init.max_tile_height = 65536;
+  exr_context_t context = nullptr;
+  const exr_result_t result = exr_start_read(&context, path.c_str(), &init);
+  if (context != nullptr) exr_finish(&context);
+  if (result != EXR_ERR_SUCCESS) {
+    std::string problem = input.first_error.empty() ? exr_get_default_error_message(result) : input.first_error;
+    for (char& c : problem)
+      if (c == '\n' || c == '\r') c = ' ';
     throw InvalidInputError(path, "not a readable OpenEXR image: " + problem);
-  };
-  if (bytes.size() < 8 || little_endian_int32(bytes.data()) != 20000630) fail("no OpenEXR magic number");
-  const bool multipart = (little_endian_int32(bytes.data() + 4) & 0x1000) != 0;
-  std::size_t position = 8;
-  auto skip_name = [&] {  // true if the name is empty
-    const std::size_t end = bytes.find('\0', position);
-    if (end == std::string_view::npos) fail("the header is truncated");
-    const bool empty = end == position;
-    position = end + 1;
-    return empty;
-  };
-  for (;;) {
-    while (!skip_name()) {
-      skip_name();  // the type's
-      if (bytes.size() - position < 4) fail("the header is truncated");
-      const std::int32_t size = little_endian_int32(bytes.data() + position);
-      position += 4;
-      if (size < 0 || static_cast<std::uint64_t>(size) > bytes.size() - position)
-        fail("a header attribute claims " + std::to_string(size) + " bytes; " +
-             std::to_string(bytes.size() - position) + " follow it");
-      position += static_cast<std::size_t>(size);
-    }
-    if (!multipart || position >= bytes.size() || bytes[position] == '\0') return;
   }
 }
 
@@ -196,7 +202,7 @@ void write_exr(const std::filesystem::path& path, const Image& image) {
 Image read_exr(const std::filesystem::path& path) { return parse_exr(read_file(path), path); }
 
 Image parse_exr(std::string_view bytes, const std::filesystem::path& path) {
-  check_exr_attribute_sizes(bytes, path);
+  check_exr_headers(bytes, path);
   try {
     MemoryStream stream(bytes, path);
     Imf::InputFile file(stream, 1);
