@@ -2,7 +2,9 @@
 // fuzz_read_mesh): scene JSON, proxy-folder manifest, sphere set, PFM and OpenEXR images.
 //
 // The first byte of an input selects the reader (its value modulo 5: 0 scene, 1 manifest,
-// 2 sphere set, 3 PFM, 4 OpenEXR); the rest is the file's content, parsed from memory. A
+// 2 sphere set, 3 PFM, 4 OpenEXR); the rest is the file's content, parsed from memory.
+// FUZZ_READERS_SELECTOR=N in the environment makes every input go to reader N instead, so
+// that a run spends its time on one reader however its mutations change the first byte. A
 // reader may reject its input only by throwing visproxy::InvalidInputError naming the
 // file (or IOError: a scene's mesh files are opened, and there are none where they point);
 // anything else escaping (another exception, a crash, a sanitizer report, a leak) is a
@@ -11,6 +13,7 @@
 //
 //   cmake --preset fuzz && cmake --build --preset fuzz --target fuzz_readers
 //   build/fuzz/tests/fuzz/fuzz_readers -max_len=4096 -dict=tests/fuzz/readers.dict CORPUS_DIR tests/fuzz/corpus
+//   FUZZ_READERS_SELECTOR=4 build/fuzz/tests/fuzz/fuzz_readers -max_len=4096 CORPUS_DIR  # OpenEXR only
 
 #include <algorithm>
 #include <cmath>
@@ -34,6 +37,9 @@ namespace {
   std::fprintf(stderr, "fuzz_readers: %s: %s\n", reader, what.c_str());
   std::abort();
 }
+
+// The reader FUZZ_READERS_SELECTOR pins, or -1.
+int pinned_selector = -1;
 
 // The file names the readers are given; every error must name its file.
 const std::filesystem::path kScene = "/nonexistent/fuzz/scene.json";
@@ -117,6 +123,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   // `cgal-demo:NAME` mesh paths in scenes point nowhere, so every input is read the same
   // way wherever the fuzzer runs.
   setenv("VISPROXY_MESH_DIR", "/nonexistent/fuzz/meshes", 1);
+  if (const char* selector = std::getenv("FUZZ_READERS_SELECTOR")) pinned_selector = std::atoi(selector) % 5;
   return 0;
 }
 
@@ -124,7 +131,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size == 0) return 0;
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
   try {
-    read(data[0], bytes);
+    read(pinned_selector >= 0 ? static_cast<std::uint8_t>(pinned_selector) : data[0], bytes);
   } catch (const visproxy::InvalidInputError& error) {
     // Errors name a file: the input's, or a mesh file a scene refers to.
     if (error.file().empty() || std::string_view(error.what()).rfind(error.file().string(), 0) != 0)
