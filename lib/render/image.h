@@ -36,8 +36,10 @@ Image parse_pfm(std::string_view bytes, const std::filesystem::path& path);
 /// OpenEXR, scanlines of 32-bit float R, G, B channels, ZIP-compressed (lossless).
 void write_exr(const std::filesystem::path& path, const Image& image);
 /// Reads the R, G and B channels of an OpenEXR image (any pixel type; missing channels
-/// read as 0); throws InvalidInputError naming the file when OpenEXR cannot read it, it is
-/// larger than 65536 pixels on a side or a pixel is not finite.
+/// read as 0); throws InvalidInputError naming the file when OpenEXR cannot read it, its
+/// header fails OpenEXRCore's strict check, it is larger than 65536 pixels on a side, a
+/// block (chunk of scanlines, tile, row of tiles) needs more than 64 MiB to decode, or a
+/// pixel is not finite.
 Image read_exr(const std::filesystem::path& path);
 /// The same from the file's bytes, through an Imf::IStream over them; `path` names it in errors.
 Image parse_exr(std::string_view bytes, const std::filesystem::path& path);

@@ -179,5 +179,37 @@ TEST_F(ImageFile, ExrHeadersAreCheckedBeforeOpenExrAllocates) {
   EXPECT_EQ(exr_error("v/1"), "image.exr: not a readable OpenEXR image: Unable to read magic and version flags");
 }
 
+std::string corpus_file(const char* name) {
+  return read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "tests/fuzz/corpus" / name)
+      .substr(1);  // past the selector
+}
+
+TEST_F(ImageFile, ExrIsReadInBandsOfBlocks) {
+  const Image tall = sample_image(7, 53);  // four bands of 16 rows, the last one short
+  write_exr(folder_ / "tall.exr", tall);
+  EXPECT_EQ(read_exr(folder_ / "tall.exr").pixels, tall.pixels);
+  // Half pixels, RLE (one row per block), the data window's corner at (-5, 7); tiles.
+  const Image offset = parse_exr(corpus_file("exr_2x3_half_rle_offset_window"), "image.exr");
+  ASSERT_EQ(offset.width, 2);
+  ASSERT_EQ(offset.height, 3);
+  EXPECT_EQ(offset.at(1, 2), Color(1.25, 1.0, 0.75));
+  const Image tiled = parse_exr(corpus_file("exr_5x3_half_tiled_zip"), "image.exr");
+  EXPECT_EQ(tiled.width, 5);
+  EXPECT_EQ(tiled.height, 3);
+}
+
+// fuzz_readers: a 566-byte tiled image of 5 by 3 pixels with tiles of 9218 by 12034 made
+// OpenEXR allocate 665 MB for one tile's decoding before reading it.
+TEST(ParseExr, BlocksLargerThan64MiBAreRejected) {
+  std::string bytes = corpus_file("exr_5x3_half_tiled_zip");
+  const std::string tiles = std::string("tiles\0tiledesc\0", 15);
+  const std::size_t at = bytes.find(tiles) + tiles.size() + 4;  // past the attribute's size
+  const std::uint32_t size[2] = {9218, 12034};
+  std::memcpy(bytes.data() + at, size, sizeof size);  // little-endian, as on the machines visproxy runs on
+  EXPECT_EQ(exr_error(bytes), "image.exr: not a readable OpenEXR image: a block of 110929412 pixels needs " +
+                                  std::to_string(110929412ull * (12 + 3 * 2)) +
+                                  " bytes to decode, more than the 64 MiB allowed");
+}
+
 }  // namespace
 }  // namespace visproxy
