@@ -119,7 +119,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
     // Specs are checked before anything is read or built.
     const std::vector<ProxySpec> specs =
         options->proxies.empty() ? default_proxy_specs() : parse_proxy_specs(options->proxies);
-    const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld});
+    const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld, .on_warning = print_warning});
     ManifestMesh described{.path = options->mesh,
                            .weld = options->weld == Weld::never ? "never" : options->weld == Weld::always ? "always" : "auto",
                            .vertices = mesh.positions.size(),

@@ -146,7 +146,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   command->callback([o, &exit_code] {
     if (!o->reference.empty() && !is_linear_image_path(o->reference))
       throw InvalidInputError(o->reference, "unsupported image format (use .pfm or .exr)");
-    Scene scene = load_scene(o->scene);
+    Scene scene = load_scene(o->scene, print_warning);
     if (o->width > 0) scene.camera.width = o->width;
     if (o->height > 0) scene.camera.height = o->height;
     const std::filesystem::path folder = o->folder.empty() ? std::filesystem::path("compare-" + o->scene.stem().string()) : o->folder;

@@ -99,7 +99,7 @@ void add_info_command(CLI::App& app, int& exit_code) {
 
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
-    const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld});
+    const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld, .on_warning = print_warning});
     const double read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const MeshFormat format = *format_from_extension(options->mesh);
     const MeshReport report = inspect_mesh(mesh);

@@ -50,9 +50,13 @@ void add_measure_command(CLI::App& app, int& exit_code) {
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
     nlohmann::json manifest = read_manifest(options->folder);
-    const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest);
-    MeasureOptions measure{.rays = options->rays, .seed = options->seed, .scene = options->scene,
-                           .timing = {.rays = options->timed_rays}, .on_start = {}};
+    const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest, print_warning);
+    MeasureOptions measure{.rays = options->rays,
+                           .seed = options->seed,
+                           .scene = options->scene,
+                           .timing = {.rays = options->timed_rays},
+                           .on_start = {},
+                           .on_warning = print_warning};
     if (::isatty(STDERR_FILENO))
       measure.on_start = [](std::string_view name) { std::cerr << "visproxy measure: " << name << " ...\n"; };
     manifest = measure_proxies(mesh, options->folder, std::move(manifest), measure);

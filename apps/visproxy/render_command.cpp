@@ -118,7 +118,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
     if (!is_linear_image_path(o->output))
       throw InvalidInputError(o->output, "unsupported image format (use .pfm or .exr; a PNG is written beside it)");
     const bool terminal = ::isatty(STDERR_FILENO);
-    Scene scene = load_scene(o->scene);
+    Scene scene = load_scene(o->scene, print_warning);
     if (o->width > 0) scene.camera.width = o->width;
     if (o->height > 0) scene.camera.height = o->height;
     SceneProxyOptions proxy_options{.cache = o->cache.empty() ? default_proxy_cache() : o->cache,

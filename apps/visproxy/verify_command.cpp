@@ -48,7 +48,7 @@ void add_verify_command(CLI::App& app, int& exit_code) {
 
   command->callback([options, &exit_code] {
     nlohmann::json manifest = read_manifest(options->folder);
-    const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest);
+    const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest, print_warning);
     const bool progress = ::isatty(STDERR_FILENO);
     std::size_t failures = 0;
     std::printf("visproxy verify: %zu proxies in %s against %s (%zu triangles)\n", manifest["proxies"].size(),

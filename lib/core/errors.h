@@ -1,9 +1,11 @@
 #pragma once
 // Typed errors that visproxy reports to users. Every message names the file and what
-// is wrong with it, on one line; the CLI prints what() and exits with code 2.
+// is wrong with it, on one line; the CLI prints what() and exits with code 2. Warnings
+// (input read despite a harmless flaw) go to a WarningHandler the caller passes in.
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -41,5 +43,14 @@ class IOError : public Error {
  private:
   std::filesystem::path file_;
 };
+
+/// A located message as errors and warnings print it: "FILE: problem", or "FILE:LINE:
+/// problem" when `line` is not 0.
+std::string located_message(const std::filesystem::path& file, std::string_view problem, std::uint64_t line = 0);
+
+/// Receives a reader's warnings about input it read despite a harmless flaw, one line each
+/// in the form of an error's what(): "FILE:LINE: what was ignored". Readers never print;
+/// the CLI passes a handler that prints to stderr. An empty handler drops the warnings.
+using WarningHandler = std::function<void(const std::string& warning)>;
 
 }  // namespace visproxy

@@ -57,7 +57,7 @@ json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& fold
     rays = ray_set_json(mesh, options);
     placements.push_back(Eigen::Affine3d::Identity());
   } else {
-    const Scene scene = load_scene(options.scene);
+    const Scene scene = load_scene(options.scene, options.on_warning);
     std::vector<bool> exclude(scene.instances.size(), false);
     for (std::size_t i = 0; i < scene.instances.size(); ++i)
       if (scene.mesh(scene.instances[i].mesh).mesh == mesh) {

@@ -2,11 +2,12 @@
 // `visproxy measure`: every proxy of a folder traced with the same seeded rays as the mesh.
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
-#include <filesystem>
 #include <string_view>
 
+#include "core/errors.h"
 #include "measure/proxy_measurement.h"
 #include "mesh/triangle_mesh.h"
 
@@ -22,6 +23,8 @@ struct MeasureOptions {
   TimingOptions timing;
   /// Called before each proxy is measured with its name (progress display); may be empty.
   std::function<void(std::string_view)> on_start;
+  /// Receives the warnings of the readers of the scene's meshes (see ReadMeshOptions).
+  WarningHandler on_warning;
 };
 
 /// The isotropic ray set every proxy of `mesh` is measured on, as the manifest records it.

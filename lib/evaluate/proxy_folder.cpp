@@ -2,18 +2,13 @@
 
 #include "core/errors.h"
 #include "core/files.h"
+#include "core/json_input.h"
 #include "mesh/read_mesh.h"
 
 namespace visproxy {
 namespace {
 
 using nlohmann::json;
-
-const json& require(const json& object, const char* key, const std::filesystem::path& file, const std::string& where) {
-  if (!object.is_object() || !object.contains(key))
-    throw InvalidInputError(file, where + " has no \"" + key + "\"");
-  return object[key];
-}
 
 Weld weld_of(const json& manifest) {
   const std::string mode = manifest.at("mesh").value("weld", "auto");
@@ -26,21 +21,46 @@ Weld weld_of(const json& manifest) {
 
 json read_manifest(const std::filesystem::path& folder) {
   const std::filesystem::path path = folder / "manifest.json";
-  const json manifest = json::parse(read_file(path), nullptr, /*allow_exceptions=*/false);
-  if (manifest.is_discarded()) throw InvalidInputError(path, "not valid JSON");
-  if (!manifest.is_object() || manifest.value("format", "") != "visproxy-manifest")
-    throw InvalidInputError(path, "not a visproxy manifest (\"format\" is not \"visproxy-manifest\")");
-  if (manifest.value("format_version", 0) != 1)
-    throw InvalidInputError(path, "unsupported format_version (this visproxy reads version 1)");
-  const json& mesh = require(manifest, "mesh", path, "the manifest");
-  for (const char* key : {"vertices", "triangles", "bbox"}) require(mesh, key, path, "\"mesh\"");
-  require(manifest, "options", path, "the manifest");
-  const json& proxies = require(manifest, "proxies", path, "the manifest");
-  if (!proxies.is_array()) throw InvalidInputError(path, "\"proxies\" is not an array");
-  for (const json& entry : proxies) {
-    const std::string where = "proxy entry " + entry.value("name", std::string("?"));
-    for (const char* key : {"name", "kind", "file", "primitive_type", "primitives"}) require(entry, key, path, where);
-    entry_kind(entry);
+  return parse_manifest(read_file(path), path);
+}
+
+json parse_manifest(std::string_view text, const std::filesystem::path& path) {
+  const JsonInput input(path);
+  json manifest = input.parse(text);
+  if (!manifest.is_object() || !manifest.contains("format") || manifest["format"] != "visproxy-manifest")
+    input.fail("", "not a visproxy manifest (\"format\" is not \"visproxy-manifest\")");
+  if (input.member(manifest, "format_version", "") != 1)
+    input.fail("format_version", "unsupported (this visproxy reads version 1)");
+  if (const json* generator = input.optional_member(manifest, "generator", "")) input.string(*generator, "generator");
+
+  const json& mesh = input.member(manifest, "mesh", "");
+  input.string(input.member(mesh, "path", "mesh"), "mesh.path");
+  input.count(input.member(mesh, "vertices", "mesh"), "mesh.vertices");
+  input.count(input.member(mesh, "triangles", "mesh"), "mesh.triangles");
+  const json& bbox = input.member(mesh, "bbox", "mesh");
+  input.triple(input.member(bbox, "min", "mesh.bbox"), "mesh.bbox.min");
+  input.triple(input.member(bbox, "max", "mesh.bbox"), "mesh.bbox.max");
+  if (const json* weld = input.optional_member(mesh, "weld", "mesh");
+      weld && *weld != "auto" && *weld != "never" && *weld != "always")
+    input.fail("mesh.weld", "must be \"auto\", \"never\" or \"always\"");
+  input.object(input.member(manifest, "options", ""), "options");
+
+  const json& proxies = input.member(manifest, "proxies", "");
+  if (!proxies.is_array()) input.fail("proxies", "expected an array of proxy entries");
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    const json& entry = proxies[i];
+    const std::string where = json_index_path("proxies", i);
+    for (const char* key : {"name", "file"})
+      input.string(input.member(entry, key, where), json_member_path(where, key));
+    const json& kind = input.member(entry, "kind", where);
+    if (kind != "outside" && kind != "inside" && kind != "general")
+      input.fail(json_member_path(where, "kind"), "must be \"outside\", \"inside\" or \"general\"");
+    const json& type = input.member(entry, "primitive_type", where);
+    if (type != "triangle" && type != "box" && type != "sphere")
+      input.fail(json_member_path(where, "primitive_type"), "must be \"triangle\", \"box\" or \"sphere\"");
+    input.count(input.member(entry, "primitives", where), json_member_path(where, "primitives"));
+    if (const json* triangles = input.optional_member(entry, "triangles", where))
+      input.count(*triangles, json_member_path(where, "triangles"));
   }
   return manifest;
 }
@@ -49,8 +69,9 @@ void write_manifest(const std::filesystem::path& folder, const json& manifest) {
   write_file_atomically(folder / "manifest.json", manifest.dump(2) + "\n");
 }
 
-TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& manifest) {
-  TriangleMesh mesh = read_mesh(path, {.weld = weld_of(manifest)});
+TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& manifest,
+                                const WarningHandler& on_warning) {
+  TriangleMesh mesh = read_mesh(path, {.weld = weld_of(manifest), .on_warning = on_warning});
   const json& described = manifest.at("mesh");
   const auto vertices = described.at("vertices").get<std::size_t>();
   const auto triangles = described.at("triangles").get<std::size_t>();
@@ -91,7 +112,7 @@ ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const jso
     return geometry;
   }
   geometry.type = type == "box" ? PrimitiveType::box : PrimitiveType::triangle;
-  geometry.mesh = read_mesh(path, {.weld = Weld::never});
+  geometry.mesh = read_mesh(path, {.weld = Weld::never, .on_warning = {}});
   const std::size_t expected = entry.value("triangles", geometry.mesh.triangles.size());
   if (geometry.mesh.triangles.size() != expected)
     throw InvalidInputError(path, "holds " + std::to_string(geometry.mesh.triangles.size()) +

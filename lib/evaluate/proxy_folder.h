@@ -4,25 +4,36 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <string_view>
 #include <vector>
 
+#include "core/errors.h"
 #include "mesh/sphere_set.h"
 #include "mesh/triangle_mesh.h"
 #include "proxy/build_proxies.h"
 
 namespace visproxy {
 
-/// FOLDER/manifest.json, checked for the fields the commands rely on. Throws IOError when
-/// it cannot be read and InvalidInputError naming it when it is not a visproxy manifest.
+/// FOLDER/manifest.json, checked for the fields read_manifest_mesh, read_proxy_geometry,
+/// entry_kind and the commands' summaries read: format and format_version; generator (if
+/// present); mesh.path, vertices, triangles, bbox.min and bbox.max, weld (if present);
+/// options; each entry's name, kind, file, primitive_type, primitives and triangles (if
+/// present). Throws IOError when it cannot be read and InvalidInputError naming it and the
+/// JSON path at fault ("manifest.json: proxies[2].kind: must be ...") otherwise. The
+/// measure, verify and error objects the report reads are not checked.
 nlohmann::json read_manifest(const std::filesystem::path& folder);
+
+/// The same from the manifest's text; `path` names it in errors.
+nlohmann::json parse_manifest(std::string_view text, const std::filesystem::path& path);
 
 /// Writes FOLDER/manifest.json atomically (two-space indented, newline at the end).
 void write_manifest(const std::filesystem::path& folder, const nlohmann::json& manifest);
 
 /// Reads the mesh at `path` as `visproxy build` did (same welding) and checks it is the
 /// one the manifest describes: same vertex and triangle counts and bounding box. Throws
-/// InvalidInputError naming `path` otherwise.
-TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest);
+/// InvalidInputError naming `path` otherwise. The reader's warnings go to `on_warning`.
+TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest,
+                                const WarningHandler& on_warning = {});
 
 /// One proxy's geometry: triangles (boxes and meshes) or spheres.
 struct ProxyGeometry {

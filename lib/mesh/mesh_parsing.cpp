@@ -82,16 +82,25 @@ std::uint64_t TextScanner::read_count(std::string_view what, bool on_line) {
   return static_cast<std::uint64_t>(value);
 }
 
-void TextScanner::fail(std::string_view problem) const {
+std::uint64_t TextScanner::line() const {
   const std::size_t upto = std::min(position_, text_.size());
-  const auto line = 1 + static_cast<std::uint64_t>(std::count(text_.begin(), text_.begin() + static_cast<std::ptrdiff_t>(upto), '\n'));
-  throw InvalidInputError(source_, problem, line);
+  if (upto < counted_position_) {  // moved back (seek): count again from the start
+    counted_position_ = 0;
+    counted_lines_ = 1;
+  }
+  counted_lines_ +=
+      static_cast<std::uint64_t>(std::count(text_.begin() + static_cast<std::ptrdiff_t>(counted_position_),
+                                            text_.begin() + static_cast<std::ptrdiff_t>(upto), '\n'));
+  counted_position_ = upto;
+  return counted_lines_;
 }
 
-std::string quote_token(std::string_view token) {
+void TextScanner::fail(std::string_view problem) const { throw InvalidInputError(source_, problem, line()); }
+
+std::string quote_token(std::string_view token, std::size_t max_length) {
   std::string text = "'";
-  for (const char c : token.substr(0, 40)) text += (c >= 0x20 && c < 0x7f) ? c : '?';
-  if (token.size() > 40) text += "...";
+  for (const char c : token.substr(0, max_length)) text += (c >= 0x20 && c < 0x7f) ? c : '?';
+  if (token.size() > max_length) text += "...";
   return text + "'";
 }
 

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/errors.h"
 #include "mesh/triangle_mesh.h"
 
 namespace visproxy::parsing {
@@ -38,6 +39,9 @@ class TextScanner {
   std::size_t position() const { return position_; }
   void seek(std::size_t position) { position_ = position; }
   std::string_view rest() const { return text_.substr(position_); }
+  /// The current line, from 1. Linear in the distance moved since the last call, so asking
+  /// once per line of a whole file costs one pass over it.
+  std::uint64_t line() const;
 
   /// Throws InvalidInputError naming the source and the current line.
   [[noreturn]] void fail(std::string_view problem) const;
@@ -50,11 +54,13 @@ class TextScanner {
   std::size_t position_ = 0;
   const std::filesystem::path& source_;
   char comment_;
+  mutable std::size_t counted_position_ = 0;  // line() has counted the newlines before here
+  mutable std::uint64_t counted_lines_ = 1;
 };
 
-/// A token as it may appear in an error message: at most 40 characters, with
-/// non-printable bytes shown as '?', in single quotes.
-std::string quote_token(std::string_view token);
+/// A token as it may appear in an error message: at most `max_length` characters (then
+/// "..."), with non-printable bytes shown as '?', in single quotes.
+std::string quote_token(std::string_view token, std::size_t max_length = 40);
 
 /// Parses a whole token as a number; false if it is not one (non-finite values parse).
 bool parse_number(std::string_view token, double& value);
@@ -94,7 +100,7 @@ void triangulate_polygon(const std::vector<Vertex>& positions, std::span<const V
                          std::vector<Triangle>& triangles);
 
 TriangleMesh parse_obj(std::string_view bytes, const std::filesystem::path& source);
-TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& source);
+TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& source, const WarningHandler& on_warning);
 TriangleMesh parse_off(std::string_view bytes, const std::filesystem::path& source);
 TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& source);
 

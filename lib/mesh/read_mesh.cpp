@@ -46,7 +46,7 @@ TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::fi
   TriangleMesh mesh;
   switch (format) {
     case MeshFormat::obj: mesh = parsing::parse_obj(bytes, source); break;
-    case MeshFormat::ply: mesh = parsing::parse_ply(bytes, source); break;
+    case MeshFormat::ply: mesh = parsing::parse_ply(bytes, source, options.on_warning); break;
     case MeshFormat::off: mesh = parsing::parse_off(bytes, source); break;
     case MeshFormat::stl: mesh = parsing::parse_stl(bytes, source); break;
   }

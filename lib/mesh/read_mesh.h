@@ -10,6 +10,7 @@
 #include <optional>
 #include <string_view>
 
+#include "core/errors.h"
 #include "mesh/triangle_mesh.h"
 
 namespace visproxy {
@@ -30,6 +31,11 @@ enum class Weld {
 
 struct ReadMeshOptions {
   Weld weld = Weld::automatic;
+  /// Called once per flaw the reader tolerates, as "FILE:LINE: problem": today only PLY
+  /// header lines that are no PLY keyword ("FILE:LINE: unknown header line '...' ignored"),
+  /// which Blender 2.4x writes. They are passed on once the header has been read, at most
+  /// 8 of them and then one line counting the rest.
+  WarningHandler on_warning;
 };
 
 /// Reads a mesh, choosing the format from the extension.
@@ -38,7 +44,9 @@ struct ReadMeshOptions {
 ///   and negative (relative) indices; any number of objects and groups, concatenated.
 /// - PLY: ascii, binary_little_endian and binary_big_endian; any scalar type for x, y, z;
 ///   any count and index type for the face list (`vertex_indices` or `vertex_index`);
-///   other elements and properties are skipped.
+///   other elements and properties are skipped. A header line that starts with no PLY
+///   keyword is skipped with a warning (options.on_warning); a malformed `format`,
+///   `element` or `property` line is an error.
 /// - OFF: OFF, COFF, NOFF, CNOFF, STOFF headers; `#` comments; per-vertex and per-face
 ///   extras (colours) ignored; polygons triangulated as for OBJ.
 /// - STL: ASCII and binary (recognised by size, whatever the header says).

@@ -1,9 +1,11 @@
 // Polygon File Format (Stanford PLY): ascii, binary_little_endian, binary_big_endian.
 // Only the `vertex` element's x, y, z and the `face` element's index list are used;
-// every other element and property is read past.
+// every other element and property is read past, and header lines that start with no PLY
+// keyword are skipped with a warning.
 
 #include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -148,7 +150,7 @@ class BodyReader {
 
 }  // namespace
 
-TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& source) {
+TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& source, const WarningHandler& on_warning) {
   TextScanner header(bytes, source);
   if (header.token_on_line() != "ply") header.fail("does not start with 'ply'");
   header.skip_line();
@@ -156,8 +158,15 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
   Encoding encoding = Encoding::ascii;
   bool have_format = false;
   std::vector<Element> elements;
+  // Lines that start with no PLY keyword, such as Blender 2.4x's "Created by Blender3D 247 -
+  // www.blender.org, source file: ..." after `format`: skipped, as rply and Assimp do, and
+  // reported once the header is known to end (a file that is no PLY at all gets one error).
+  std::vector<std::string> warnings;
+  std::uint64_t unreported_lines = 0;
+  constexpr std::size_t kMaxWarnings = 8;
   for (;;) {
     if (!header.skip_to_token()) header.fail("the header has no 'end_header' line");
+    const std::size_t line_start = header.position();
     const std::string_view keyword = header.token_on_line();
     if (keyword == "end_header") {
       header.skip_line();
@@ -191,10 +200,20 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
       property.name = header.token_on_line();
       if (property.name.empty()) header.fail("property without a name");
       elements.back().properties.push_back(std::move(property));
+    } else if (warnings.size() < kMaxWarnings) {
+      std::string_view text = bytes.substr(line_start, bytes.find('\n', line_start) - line_start);
+      while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+      warnings.push_back(
+          located_message(source, "unknown header line " + quote_token(text, 120) + " ignored", header.line()));
     } else {
-      header.fail("unknown header keyword " + quote_token(keyword));
+      ++unreported_lines;
     }
     header.skip_line();
+  }
+  if (on_warning) {
+    for (const std::string& warning : warnings) on_warning(warning);
+    if (unreported_lines > 0)
+      on_warning(located_message(source, std::to_string(unreported_lines) + " more unknown header lines ignored"));
   }
   if (!have_format) header.fail("the header has no 'format' line");
 

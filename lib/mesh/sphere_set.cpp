@@ -1,12 +1,14 @@
 #include "mesh/sphere_set.h"
 
-#include <charconv>
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.h"
 #include "core/files.h"
+#include "core/json_input.h"
 #include "mesh/subdivide.h"
 
 namespace visproxy {
@@ -16,13 +18,6 @@ void append_number(std::string& out, double value) {
   char buffer[32];
   const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);  // shortest round-trip form
   out.append(buffer, result.ptr);
-}
-
-double finite_number(const nlohmann::json& value, const std::filesystem::path& path, const std::string& what) {
-  if (!value.is_number()) throw InvalidInputError(path, what + " is not a number");
-  const double number = value.get<double>();
-  if (!std::isfinite(number)) throw InvalidInputError(path, what + " is not finite");
-  return number;
 }
 
 TriangleMesh unit_icosphere(int levels) {
@@ -60,27 +55,24 @@ void write_sphere_set(const std::filesystem::path& path, const std::vector<Spher
   write_file_atomically(path, encode_sphere_set(spheres));
 }
 
-std::vector<Sphere> read_sphere_set(const std::filesystem::path& path) {
-  const std::string bytes = read_file(path);
-  const nlohmann::json document = nlohmann::json::parse(bytes, nullptr, /*allow_exceptions=*/false);
-  if (document.is_discarded()) throw InvalidInputError(path, "not valid JSON");
-  if (!document.is_object() || !document.contains("spheres") || !document["spheres"].is_array())
-    throw InvalidInputError(path, "expected an object with a \"spheres\" array");
+std::vector<Sphere> read_sphere_set(const std::filesystem::path& path) { return parse_sphere_set(read_file(path), path); }
+
+std::vector<Sphere> parse_sphere_set(std::string_view text, const std::filesystem::path& path) {
+  const JsonInput input(path);
+  const nlohmann::json document = input.parse(text);
+  if (!document.is_object()) input.fail("", "expected an object with a \"spheres\" array");
+  const nlohmann::json& list = input.member(document, "spheres", "");
+  if (!list.is_array()) input.fail("spheres", "expected an array of spheres");
   std::vector<Sphere> spheres;
-  spheres.reserve(document["spheres"].size());
-  for (const nlohmann::json& item : document["spheres"]) {
-    const std::string what = "sphere " + std::to_string(spheres.size());
-    if (!item.is_object() || !item.contains("center") || !item.contains("radius"))
-      throw InvalidInputError(path, what + " needs \"center\" and \"radius\"");
-    const nlohmann::json& center = item["center"];
-    if (!center.is_array() || center.size() != 3)
-      throw InvalidInputError(path, what + ": \"center\" must be an array of 3 numbers");
-    Sphere sphere;
-    for (int axis = 0; axis < 3; ++axis)
-      sphere.center[axis] = finite_number(center[static_cast<std::size_t>(axis)], path, what + " centre");
-    sphere.radius = finite_number(item["radius"], path, what + " radius");
-    if (sphere.radius < 0) throw InvalidInputError(path, what + " has a negative radius");
-    spheres.push_back(sphere);
+  spheres.reserve(list.size());
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string where = json_index_path("spheres", i);
+    const std::array<double, 3> center =
+        input.triple(input.member(list[i], "center", where), json_member_path(where, "center"));
+    const std::string radius_path = json_member_path(where, "radius");
+    const double radius = input.number(input.member(list[i], "radius", where), radius_path);
+    if (radius < 0) input.fail(radius_path, "must not be negative");
+    spheres.push_back({{center[0], center[1], center[2]}, radius});
   }
   return spheres;
 }

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mesh/triangle_mesh.h"
@@ -25,9 +26,12 @@ std::string encode_sphere_set(const std::vector<Sphere>& spheres);
 void write_sphere_set(const std::filesystem::path& path, const std::vector<Sphere>& spheres);
 
 /// Reads a sphere-set file. Throws IOError when it cannot be read and InvalidInputError
-/// naming the file when it is not valid JSON of the shape above, or a centre or radius is
-/// not finite, or a radius is negative.
+/// naming the file and the JSON path at fault ("spheres[3].radius: must not be negative")
+/// when it is not valid JSON of the shape above or a radius is negative.
 std::vector<Sphere> read_sphere_set(const std::filesystem::path& path);
+
+/// The same from the file's text; `path` names it in errors.
+std::vector<Sphere> parse_sphere_set(std::string_view text, const std::filesystem::path& path);
 
 /// Every sphere as a closed triangle mesh (an icosahedron subdivided `levels` times and
 /// pushed onto the sphere), joined into one mesh: for looking at sphere proxies in a mesh

@@ -3,6 +3,7 @@
 // between two.
 
 #include <filesystem>
+#include <string_view>
 #include <vector>
 
 #include "scene/scene.h"
@@ -25,14 +26,23 @@ struct Image {
 /// Portable float map, little-endian RGB (scale -1), rows bottom to top as the format
 /// requires. Values are stored as float.
 void write_pfm(const std::filesystem::path& path, const Image& image);
-/// Reads a colour PFM of either byte order; throws InvalidInputError naming the file.
+/// Reads a colour PFM of either byte order: "PF", width and height (1 to 65536), a non-zero
+/// scale (negative: little-endian), one whitespace byte, the pixels. Throws InvalidInputError
+/// naming the file when the header is malformed, pixels are missing or one is not finite.
 Image read_pfm(const std::filesystem::path& path);
+/// The same from the file's bytes; `path` names it in errors.
+Image parse_pfm(std::string_view bytes, const std::filesystem::path& path);
 
 /// OpenEXR, scanlines of 32-bit float R, G, B channels, ZIP-compressed (lossless).
 void write_exr(const std::filesystem::path& path, const Image& image);
 /// Reads the R, G and B channels of an OpenEXR image (any pixel type; missing channels
-/// read as 0); throws InvalidInputError naming the file.
+/// read as 0); throws InvalidInputError naming the file when OpenEXR cannot read it, its
+/// header fails OpenEXRCore's strict check, it is larger than 65536 pixels on a side, a
+/// block (chunk of scanlines, tile, row of tiles) needs more than 64 MiB to decode, or a
+/// pixel is not finite.
 Image read_exr(const std::filesystem::path& path);
+/// The same from the file's bytes, through an Imf::IStream over them; `path` names it in errors.
+Image parse_exr(std::string_view bytes, const std::filesystem::path& path);
 
 /// Whether the linear formats know this extension (".pfm", ".exr").
 bool is_linear_image_path(const std::filesystem::path& path);

@@ -1,12 +1,15 @@
 #include "scene/scene.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <numbers>
 
 #include "core/errors.h"
 #include "core/files.h"
+#include "core/json_input.h"
 #include "mesh/read_mesh.h"
 
 namespace visproxy {
@@ -14,120 +17,134 @@ namespace {
 
 using nlohmann::json;
 
-class Parser {
+// The scene's checks on top of JsonInput's; every error names the JSON path at fault.
+class Parser : public JsonInput {
  public:
-  explicit Parser(const std::filesystem::path& path) : path_(path) {}
-
-  [[noreturn]] void fail(const std::string& where, const std::string& problem) const {
-    throw InvalidInputError(path_, where + ": " + problem);
-  }
-
-  const json& member(const json& object, const char* key, const std::string& where) const {
-    if (!object.is_object()) fail(where, "expected an object");
-    if (!object.contains(key)) fail(where, std::string("missing \"") + key + "\"");
-    return object[key];
-  }
-
-  double number(const json& value, const std::string& where) const {
-    if (!value.is_number()) fail(where, "expected a number");
-    const double x = value.get<double>();
-    if (!std::isfinite(x)) fail(where, "not finite");
-    return x;
-  }
+  Parser(const std::filesystem::path& path, const WarningHandler& on_warning)
+      : JsonInput(path), on_warning_(on_warning) {}
 
   Eigen::Vector3d vector3(const json& value, const std::string& where) const {
-    if (!value.is_array() || value.size() != 3) fail(where, "expected an array of 3 numbers");
-    return {number(value[0], where), number(value[1], where), number(value[2], where)};
+    const std::array<double, 3> xyz = triple(value, where);
+    return {xyz[0], xyz[1], xyz[2]};
   }
 
+  // One number for grey, or [r, g, b]; never negative.
   Color color(const json& value, const std::string& where) const {
-    if (value.is_number()) return Color::Constant(number(value, where));
-    const Color c = vector3(value, where);
-    if ((c.array() < 0).any()) fail(where, "negative colour");
+    if (!value.is_number() && !value.is_array()) fail(where, "expected an array of 3 numbers (r, g, b) or one number");
+    const Color c = value.is_number() ? Color::Constant(number(value, where)) : vector3(value, where);
+    if ((c.array() < 0).any()) fail(where, "must not be negative");
     return c;
-  }
-
-  int positive_int(const json& value, const std::string& where, int max) const {
-    if (!value.is_number_integer() || value.get<long long>() < 1 || value.get<long long>() > max)
-      fail(where, "expected an integer from 1 to " + std::to_string(max));
-    return value.get<int>();
   }
 
   std::filesystem::path mesh_path(const std::string& file) const {
     static constexpr std::string_view prefix = "cgal-demo:";
     if (file.starts_with(prefix)) return cgal_demo_mesh_dir() / file.substr(prefix.size());
     const std::filesystem::path p(file);
-    return p.is_absolute() ? p : path_.parent_path() / p;
+    return p.is_absolute() ? p : this->file().parent_path() / p;
+  }
+
+  SceneMesh mesh(const std::string& name, const json& value, const std::string& where) const {
+    object(value, where);
+    SceneMesh mesh{name, {}, {}, {}};
+    if (const json* folder = optional_member(value, "proxy_folder", where))
+      mesh.proxy_folder = mesh_path(string(*folder, json_member_path(where, "proxy_folder")));
+    if (const json* file = optional_member(value, "file", where)) {
+      const std::string& file_name = string(*file, json_member_path(where, "file"));
+      if (value.contains("positions") || value.contains("triangles"))
+        fail(where, "give either \"file\" or \"positions\" and \"triangles\", not both");
+      mesh.file = mesh_path(file_name);
+      // Its own errors name the mesh file.
+      mesh.mesh = read_mesh(mesh.file, {.weld = Weld::automatic, .on_warning = on_warning_});
+      if (mesh.mesh.triangles.empty()) throw InvalidInputError(mesh.file, "has no triangles");
+    } else {
+      mesh.mesh = inline_mesh(value, where);
+    }
+    return mesh;
   }
 
   TriangleMesh inline_mesh(const json& value, const std::string& where) const {
     TriangleMesh mesh;
+    const std::string positions_path = json_member_path(where, "positions");
+    const std::string triangles_path = json_member_path(where, "triangles");
     const json& positions = member(value, "positions", where);
+    if (!positions.is_array()) fail(positions_path, "expected an array of points");
     const json& triangles = member(value, "triangles", where);
-    if (!positions.is_array() || !triangles.is_array()) fail(where, "\"positions\" and \"triangles\" must be arrays");
-    for (const json& p : positions) mesh.positions.push_back(vector3(p, where + " positions"));
-    for (const json& t : triangles) {
-      if (!t.is_array() || t.size() != 3) fail(where, "a triangle is not 3 indices");
+    if (!triangles.is_array() || triangles.empty()) fail(triangles_path, "expected a non-empty array of triangles");
+    for (std::size_t v = 0; v < positions.size(); ++v)
+      mesh.positions.push_back(vector3(positions[v], json_index_path(positions_path, v)));
+    for (std::size_t t = 0; t < triangles.size(); ++t) {
+      const json& corners = triangles[t];
+      const std::string triangle_path = json_index_path(triangles_path, t);
+      if (!corners.is_array() || corners.size() != 3) fail(triangle_path, "expected an array of 3 vertex indices");
+      if (mesh.positions.empty()) fail(triangle_path, "refers to vertices, but \"positions\" is empty");
       Triangle triangle{};
-      for (std::size_t i = 0; i < 3; ++i) {
-        if (!t[i].is_number_integer() || t[i].get<long long>() < 0 ||
-            t[i].get<long long>() >= static_cast<long long>(mesh.positions.size()))
-          fail(where, "triangle index out of range");
-        triangle[i] = t[i].get<VertexIndex>();
-      }
+      for (std::size_t k = 0; k < 3; ++k)
+        triangle[k] = static_cast<VertexIndex>(
+            integer(corners[k], json_index_path(triangle_path, k), 0, mesh.positions.size() - 1));
       mesh.triangles.push_back(triangle);
     }
-    if (mesh.triangles.empty()) fail(where, "no triangles");
     return mesh;
   }
 
   // scale, then rotate, then translate; or a 4x4 row-major matrix; "fit" places a mesh by
   // its bounding box after the rotation: uniform scale to the height, bottom centre on base.
-  Eigen::Affine3d transform(const json& value, const std::string& where, const TriangleMesh* mesh) const {
+  Eigen::Affine3d transform(const json& value, const std::string& where, const TriangleMesh& mesh) const {
+    object(value, where);
     Eigen::Affine3d result = Eigen::Affine3d::Identity();
-    if (!value.is_object()) fail(where, "expected an object");
-    if (value.contains("matrix")) {
-      const json& m = value["matrix"];
-      if (!m.is_array() || m.size() != 16) fail(where, "\"matrix\" must hold 16 numbers (row-major 4x4)");
+    if (const json* m = optional_member(value, "matrix", where)) {
+      for (const char* other : {"scale", "rotate", "translate"})
+        if (value.contains(other)) fail(where, std::string("\"matrix\" and \"") + other + "\" exclude each other");
+      const std::string matrix_path = json_member_path(where, "matrix");
+      if (!m->is_array() || m->size() != 16 ||
+          !std::all_of(m->begin(), m->end(), [](const json& x) { return x.is_number(); }))
+        fail(matrix_path, "expected an array of 16 numbers (a row-major 4x4 matrix)");
       Eigen::Matrix4d matrix;
       for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) matrix(r, c) = number(m[static_cast<std::size_t>(4 * r + c)], where + " matrix");
-      if (matrix.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) fail(where, "\"matrix\" must be affine (last row 0 0 0 1)");
+        for (int c = 0; c < 4; ++c) matrix(r, c) = number((*m)[static_cast<std::size_t>(4 * r + c)], matrix_path);
+      if (matrix.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) fail(matrix_path, "must be affine (last row 0 0 0 1)");
       result.matrix() = matrix;
     } else {
       Eigen::Vector3d scale = Eigen::Vector3d::Ones();
-      if (value.contains("scale"))
-        scale = value["scale"].is_number() ? Eigen::Vector3d::Constant(number(value["scale"], where + " scale"))
-                                           : vector3(value["scale"], where + " scale");
+      if (const json* s = optional_member(value, "scale", where)) {
+        const std::string scale_path = json_member_path(where, "scale");
+        if (s->is_array())
+          scale = vector3(*s, scale_path);
+        else if (s->is_number())
+          scale = Eigen::Vector3d::Constant(positive_number(*s, scale_path));
+        else
+          fail(scale_path, "expected a positive number or an array of 3 numbers");
+      }
       Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-      if (value.contains("rotate")) {
-        const json& r = value["rotate"];
-        const Eigen::Vector3d axis = vector3(member(r, "axis", where + " rotate"), where + " rotate axis");
-        if (axis.norm() == 0) fail(where, "rotation axis is zero");
-        const double degrees = number(member(r, "degrees", where + " rotate"), where + " rotate degrees");
-        rotation = Eigen::AngleAxisd(degrees * std::numbers::pi / 180, axis.normalized()).toRotationMatrix();
+      if (const json* r = optional_member(value, "rotate", where)) {
+        const std::string rotate_path = json_member_path(where, "rotate");
+        const std::string axis_path = json_member_path(rotate_path, "axis");
+        const Eigen::Vector3d axis = vector3(member(*r, "axis", rotate_path), axis_path);
+        if (!(axis.stableNorm() > 0)) fail(axis_path, "must not be zero");
+        const double degrees = number(member(*r, "degrees", rotate_path), json_member_path(rotate_path, "degrees"));
+        rotation = Eigen::AngleAxisd(degrees * std::numbers::pi / 180, axis.stableNormalized()).toRotationMatrix();
       }
       result.linear() = rotation * scale.asDiagonal();
-      if (value.contains("translate")) result.translation() = vector3(value["translate"], where + " translate");
+      if (const json* t = optional_member(value, "translate", where))
+        result.translation() = vector3(*t, json_member_path(where, "translate"));
     }
-    if (value.contains("fit")) {
-      if (!mesh) fail(where, "\"fit\" needs a mesh");
-      const json& fit = value["fit"];
-      const Vertex base = vector3(member(fit, "base", where + " fit"), where + " fit base");
-      const double height = number(member(fit, "height", where + " fit"), where + " fit height");
+    if (const json* fit = optional_member(value, "fit", where)) {
+      const std::string fit_path = json_member_path(where, "fit");
+      const Vertex base = vector3(member(*fit, "base", fit_path), json_member_path(fit_path, "base"));
+      const double height = positive_number(member(*fit, "height", fit_path), json_member_path(fit_path, "height"));
       BoundingBox box;
-      for (const Vertex& p : used_positions(*mesh)) box.extend(result * p);
-      if (box.empty() || box.max.y() <= box.min.y() || height <= 0) fail(where, "cannot fit a flat or empty mesh");
+      for (const Vertex& p : used_positions(mesh)) box.extend(result * p);
+      if (box.empty() || !(box.max.y() > box.min.y())) fail(fit_path, "cannot fit a mesh that is flat in y");
       const double s = height / (box.max.y() - box.min.y());
       const Vertex bottom(0.5 * (box.min.x() + box.max.x()), box.min.y(), 0.5 * (box.min.z() + box.max.z()));
       result = Eigen::Translation3d(base) * Eigen::Scaling(s) * Eigen::Translation3d(-bottom) * result;
     }
-    if (std::abs(result.linear().determinant()) < 1e-300) fail(where, "transform is singular");
+    if (!result.matrix().allFinite()) fail(where, "not finite (the product overflows)");
+    if (std::abs(result.linear().determinant()) < 1e-300) fail(where, "singular");
     return result;
   }
 
  private:
-  std::filesystem::path path_;
+  const WarningHandler& on_warning_;
 };
 
 }  // namespace
@@ -135,7 +152,7 @@ class Parser {
 const SceneMesh& Scene::mesh(const std::string& name) const {
   for (const SceneMesh& m : meshes)
     if (m.name == name) return m;
-  throw InvalidInputError(file, "no mesh named \"" + name + "\"");
+  throw InvalidInputError(file, "no mesh named " + json_quoted(name));
 }
 
 std::filesystem::path cgal_demo_mesh_dir() {
@@ -143,111 +160,109 @@ std::filesystem::path cgal_demo_mesh_dir() {
   return VISPROXY_DEFAULT_MESH_DIR;
 }
 
-Scene parse_scene(const std::string& text, const std::filesystem::path& path) {
-  const Parser p(path);
-  const json document = json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (document.is_discarded()) throw InvalidInputError(path, "not valid JSON");
-  if (!document.is_object() || document.value("format", "") != "visproxy-scene")
-    throw InvalidInputError(path, "not a visproxy scene (\"format\" is not \"visproxy-scene\")");
-  if (document.value("format_version", 0) != 1) throw InvalidInputError(path, "unsupported format_version (expected 1)");
+Scene parse_scene(const std::string& text, const std::filesystem::path& path, const WarningHandler& on_warning) {
+  const Parser p(path, on_warning);
+  const json document = p.parse(text);
+  if (!document.is_object() || !document.contains("format") || document["format"] != "visproxy-scene")
+    p.fail("", "not a visproxy scene (\"format\" is not \"visproxy-scene\")");
+  if (p.member(document, "format_version", "") != 1)
+    p.fail("format_version", "unsupported (this visproxy reads version 1)");
+  if (const json* description = p.optional_member(document, "description", "")) p.string(*description, "description");
 
   Scene scene;
   scene.file = path;
-  const json& meshes = p.member(document, "meshes", "scene");
-  if (!meshes.is_object() || meshes.empty()) p.fail("meshes", "expected an object of named meshes");
-  for (const auto& [name, value] : meshes.items()) {
-    const std::string where = "mesh \"" + name + "\"";
-    SceneMesh mesh{name, {}, {}, {}};
-    if (value.contains("proxy_folder")) {
-      if (!value["proxy_folder"].is_string()) p.fail(where, "\"proxy_folder\" must be a string");
-      mesh.proxy_folder = p.mesh_path(value["proxy_folder"].get<std::string>());
-    }
-    if (value.contains("file")) {
-      if (!value["file"].is_string()) p.fail(where, "\"file\" must be a string");
-      mesh.file = p.mesh_path(value["file"].get<std::string>());
-      mesh.mesh = read_mesh(mesh.file);  // its own errors name the mesh file
-      if (mesh.mesh.triangles.empty()) throw InvalidInputError(mesh.file, "has no triangles");
-    } else {
-      mesh.mesh = p.inline_mesh(value, where);
-    }
-    scene.meshes.push_back(std::move(mesh));
-  }
+  auto find_mesh = [&](const json& name, const std::string& where) -> const SceneMesh& {
+    const std::string& wanted = p.string(name, where);
+    for (const SceneMesh& m : scene.meshes)
+      if (m.name == wanted) return m;
+    p.fail(where, "no mesh named " + json_quoted(wanted));
+  };
 
-  const json& instances = p.member(document, "instances", "scene");
+  const json& meshes = p.member(document, "meshes", "");
+  if (!meshes.is_object() || meshes.empty()) p.fail("meshes", "expected an object of named meshes");
+  for (const auto& [name, value] : meshes.items())
+    scene.meshes.push_back(p.mesh(name, value, json_member_path("meshes", name)));
+
+  const json& instances = p.member(document, "instances", "");
   if (!instances.is_array() || instances.empty()) p.fail("instances", "expected a non-empty array");
   for (std::size_t i = 0; i < instances.size(); ++i) {
     const json& value = instances[i];
-    const std::string where = "instance " + std::to_string(i);
+    const std::string where = json_index_path("instances", i);
     SceneInstance instance;
-    const json& mesh_name = p.member(value, "mesh", where);
-    if (!mesh_name.is_string()) p.fail(where, "\"mesh\" must be a mesh name");
-    instance.mesh = mesh_name.get<std::string>();
-    const SceneMesh* mesh = nullptr;
-    for (const SceneMesh& m : scene.meshes)
-      if (m.name == instance.mesh) mesh = &m;
-    if (!mesh) p.fail(where, "no mesh named \"" + instance.mesh + "\"");
-    if (value.contains("transform")) instance.transform = p.transform(value["transform"], where + " transform", &mesh->mesh);
-    if (value.contains("albedo")) {
-      instance.albedo = p.color(value["albedo"], where + " albedo");
-      if ((instance.albedo.array() > 1).any()) p.fail(where, "albedo above 1 reflects more light than it receives");
+    const SceneMesh& mesh = find_mesh(p.member(value, "mesh", where), json_member_path(where, "mesh"));
+    instance.mesh = mesh.name;
+    if (const json* transform = p.optional_member(value, "transform", where))
+      instance.transform = p.transform(*transform, json_member_path(where, "transform"), mesh.mesh);
+    if (const json* albedo = p.optional_member(value, "albedo", where)) {
+      instance.albedo = p.color(*albedo, json_member_path(where, "albedo"));
+      if ((instance.albedo.array() > 1).any())
+        p.fail(json_member_path(where, "albedo"), "above 1 reflects more light than it receives");
     }
-    if (value.contains("proxies")) {
-      if (!value["proxies"].is_array()) p.fail(where, "\"proxies\" must be an array of proxy specs");
-      for (const json& spec : value["proxies"]) {
-        if (!spec.is_string()) p.fail(where, "a proxy spec is not a string");
-        instance.proxies.push_back(spec.get<std::string>());
-      }
+    if (const json* proxies = p.optional_member(value, "proxies", where)) {
+      const std::string proxies_path = json_member_path(where, "proxies");
+      if (!proxies->is_array()) p.fail(proxies_path, "expected an array of proxy specs");
+      for (std::size_t k = 0; k < proxies->size(); ++k)
+        instance.proxies.push_back(p.string((*proxies)[k], json_index_path(proxies_path, k)));
     }
     scene.instances.push_back(std::move(instance));
   }
 
-  const json& lights = p.member(document, "lights", "scene");
+  const json& lights = p.member(document, "lights", "");
   if (!lights.is_array() || lights.empty()) p.fail("lights", "expected a non-empty array");
   for (std::size_t i = 0; i < lights.size(); ++i) {
     const json& value = lights[i];
-    const std::string where = "light " + std::to_string(i);
+    const std::string where = json_index_path("lights", i);
     AreaLight light;
-    light.radiance = p.color(p.member(value, "radiance", where), where + " radiance");
-    light.two_sided = value.value("two_sided", false);
-    const std::string type = p.member(value, "type", where).is_string() ? value["type"].get<std::string>() : "";
+    light.radiance = p.color(p.member(value, "radiance", where), json_member_path(where, "radiance"));
+    if (const json* two_sided = p.optional_member(value, "two_sided", where))
+      light.two_sided = p.boolean(*two_sided, json_member_path(where, "two_sided"));
+    const json& type = p.member(value, "type", where);
     if (type == "parallelogram") {
-      const Vertex corner = p.vector3(p.member(value, "corner", where), where + " corner");
-      const Vertex u = p.vector3(p.member(value, "edge1", where), where + " edge1");
-      const Vertex v = p.vector3(p.member(value, "edge2", where), where + " edge2");
-      if (u.cross(v).norm() == 0) p.fail(where, "edges are parallel: the light has no area");
+      const Vertex corner = p.vector3(p.member(value, "corner", where), json_member_path(where, "corner"));
+      const Vertex u = p.vector3(p.member(value, "edge1", where), json_member_path(where, "edge1"));
+      const Vertex v = p.vector3(p.member(value, "edge2", where), json_member_path(where, "edge2"));
+      if (!(u.cross(v).stableNorm() > 0)) p.fail(where, "\"edge1\" and \"edge2\" are parallel: the light has no area");
       light.triangles.push_back({corner, corner + u, corner + u + v});
       light.triangles.push_back({corner, corner + u + v, corner + v});
     } else if (type == "mesh") {
-      const json& name = p.member(value, "mesh", where);
-      const SceneMesh* mesh = nullptr;
-      for (const SceneMesh& m : scene.meshes)
-        if (name.is_string() && m.name == name.get<std::string>()) mesh = &m;
-      if (!mesh) p.fail(where, "\"mesh\" names no mesh of the scene");
+      const SceneMesh& mesh = find_mesh(p.member(value, "mesh", where), json_member_path(where, "mesh"));
+      const json* transform_value = p.optional_member(value, "transform", where);
       const Eigen::Affine3d transform =
-          value.contains("transform") ? p.transform(value["transform"], where + " transform", &mesh->mesh) : Eigen::Affine3d::Identity();
-      for (const Triangle& t : mesh->mesh.triangles)
-        light.triangles.push_back({transform * mesh->mesh.positions[t[0]], transform * mesh->mesh.positions[t[1]],
-                                   transform * mesh->mesh.positions[t[2]]});
+          transform_value ? p.transform(*transform_value, json_member_path(where, "transform"), mesh.mesh)
+                          : Eigen::Affine3d::Identity();
+      for (const Triangle& t : mesh.mesh.triangles)
+        light.triangles.push_back({transform * mesh.mesh.positions[t[0]], transform * mesh.mesh.positions[t[1]],
+                                   transform * mesh.mesh.positions[t[2]]});
     } else {
-      p.fail(where, "\"type\" must be \"parallelogram\" or \"mesh\"");
+      p.fail(json_member_path(where, "type"), "must be \"parallelogram\" or \"mesh\"");
     }
+    for (const std::array<Vertex, 3>& triangle : light.triangles)
+      for (const Vertex& corner : triangle)
+        if (!corner.allFinite()) p.fail(where, "a corner is not finite (its coordinates overflow)");
     scene.lights.push_back(std::move(light));
   }
 
-  const json& camera = p.member(document, "camera", "scene");
-  scene.camera.from = p.vector3(p.member(camera, "from", "camera"), "camera from");
-  scene.camera.at = p.vector3(p.member(camera, "at", "camera"), "camera at");
-  if (camera.contains("up")) scene.camera.up = p.vector3(camera["up"], "camera up");
-  if (camera.contains("fov_degrees")) scene.camera.fov_degrees = p.number(camera["fov_degrees"], "camera fov_degrees");
-  if (scene.camera.fov_degrees <= 0 || scene.camera.fov_degrees >= 180) p.fail("camera", "fov_degrees must be in (0, 180)");
-  if (camera.contains("width")) scene.camera.width = p.positive_int(camera["width"], "camera width", 16384);
-  if (camera.contains("height")) scene.camera.height = p.positive_int(camera["height"], "camera height", 16384);
+  const json& camera = p.object(p.member(document, "camera", ""), "camera");
+  scene.camera.from = p.vector3(p.member(camera, "from", "camera"), "camera.from");
+  scene.camera.at = p.vector3(p.member(camera, "at", "camera"), "camera.at");
+  if (const json* up = p.optional_member(camera, "up", "camera")) scene.camera.up = p.vector3(*up, "camera.up");
+  if (const json* fov = p.optional_member(camera, "fov_degrees", "camera")) {
+    scene.camera.fov_degrees = p.number(*fov, "camera.fov_degrees");
+    if (!(scene.camera.fov_degrees > 0 && scene.camera.fov_degrees < 180))
+      p.fail("camera.fov_degrees", "must be in (0, 180)");
+  }
+  if (const json* width = p.optional_member(camera, "width", "camera"))
+    scene.camera.width = static_cast<int>(p.integer(*width, "camera.width", 1, 16384));
+  if (const json* height = p.optional_member(camera, "height", "camera"))
+    scene.camera.height = static_cast<int>(p.integer(*height, "camera.height", 1, 16384));
   const Vertex view = scene.camera.at - scene.camera.from;
-  if (view.norm() == 0 || view.cross(scene.camera.up).norm() == 0)
+  if (!view.allFinite() || !(view.stableNorm() > 0) || !(view.cross(scene.camera.up).stableNorm() > 0))
     p.fail("camera", "\"from\", \"at\" and \"up\" do not define a view (zero or parallel)");
   return scene;
 }
 
-Scene load_scene(const std::filesystem::path& path) { return parse_scene(read_file(path), path); }
+Scene load_scene(const std::filesystem::path& path, const WarningHandler& on_warning) {
+  return parse_scene(read_file(path), path, on_warning);
+}
 
 }  // namespace visproxy

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/errors.h"
 #include "mesh/triangle_mesh.h"
 
 namespace visproxy {
@@ -66,10 +67,13 @@ std::filesystem::path cgal_demo_mesh_dir();
 
 /// Reads a scene file. Mesh paths are relative to the scene file's folder, or
 /// `cgal-demo:NAME` for a libcgal-demo mesh. Throws IOError for unreadable files and
-/// InvalidInputError naming the scene (or mesh) file and the problem otherwise.
-Scene load_scene(const std::filesystem::path& path);
+/// InvalidInputError otherwise, naming the mesh file for a mesh file's problems and else
+/// the scene file and the JSON path of the value at fault:
+///   scene.json: instances[2].transform.fit.height: must be a positive number
+/// The mesh readers' warnings (ReadMeshOptions::on_warning) go to `on_warning`.
+Scene load_scene(const std::filesystem::path& path, const WarningHandler& on_warning = {});
 
 /// The same from JSON text; `path` names it in errors and anchors relative paths.
-Scene parse_scene(const std::string& text, const std::filesystem::path& path);
+Scene parse_scene(const std::string& text, const std::filesystem::path& path, const WarningHandler& on_warning = {});
 
 }  // namespace visproxy

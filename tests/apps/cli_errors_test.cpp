@@ -107,5 +107,38 @@ TEST(Cli, HelpAndVersionExitWithZero) {
   EXPECT_EQ(testing::run_visproxy("--version").exit_code, 0);
 }
 
+// A mistyped subcommand gets one line and exit code 2, with or without --help, instead of
+// the top-level help or "A subcommand is required".
+TEST(Cli, UnknownSubcommandSuggestsTheNearestOne) {
+  for (const char* arguments : {"biuld", "biuld --help", "biuld model.off -o out", "--help biuld"}) {
+    const auto result = testing::run_visproxy(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments;
+    EXPECT_TRUE(result.out.empty()) << arguments << ": " << result.out;
+    EXPECT_EQ(result.err, "visproxy: unknown subcommand 'biuld' (did you mean 'build'?)\n") << arguments;
+  }
+  EXPECT_EQ(testing::run_visproxy("rendr").err, "visproxy: unknown subcommand 'rendr' (did you mean 'render'?)\n");
+  EXPECT_EQ(testing::run_visproxy("inof --help").err, "visproxy: unknown subcommand 'inof' (did you mean 'info'?)\n");
+}
+
+TEST(Cli, FarOffSubcommandGetsNoSuggestion) {
+  for (const char* arguments : {"frobnicate", "frobnicate --help", "xy"}) {
+    const auto result = testing::run_visproxy(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments;
+    EXPECT_TRUE(result.out.empty()) << arguments << ": " << result.out;
+    EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "exactly one line: " << result.err;
+    EXPECT_EQ(result.err.find("did you mean"), std::string::npos) << result.err;
+    EXPECT_EQ(result.err.rfind("visproxy: unknown subcommand '", 0), 0u) << result.err;
+  }
+}
+
+TEST(Cli, EverySubcommandsHelpExitsWithZero) {
+  for (const char* command : {"info", "build", "verify", "measure", "report", "render", "generate", "compare"}) {
+    const auto result = testing::run_visproxy(std::string(command) + " --help");
+    EXPECT_EQ(result.exit_code, 0) << command << ": " << result.err;
+    EXPECT_NE(result.out.find(command), std::string::npos) << result.out;
+    EXPECT_TRUE(result.err.empty()) << command << ": " << result.err;
+  }
+}
+
 }  // namespace
 }  // namespace visproxy

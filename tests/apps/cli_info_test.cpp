@@ -1,10 +1,13 @@
 // `visproxy info` on real meshes, as text and as JSON.
 
 #include <gtest/gtest.h>
+
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_test_support.h"
 #include "test_meshes.h"
+#include "test_support.h"
 
 namespace visproxy {
 namespace {
@@ -55,6 +58,26 @@ TEST(CliInfo, StlIsWeldedUnlessAskedNotTo) {
   const auto soup = nlohmann::json::parse(testing::run_visproxy("info --json --weld never '" + path + "'").out);
   EXPECT_EQ(soup.at("vertices"), 3 * soup.at("triangles").get<int>());
   EXPECT_EQ(soup.at("watertight"), false);
+}
+
+using CliInfoWarnings = testing::ScratchFolder;
+
+TEST_F(CliInfoWarnings, BlenderPlyHeaderLineIsReportedOnStderr) {
+  const auto path = folder_ / "blender.ply";
+  std::ofstream(path, std::ios::binary)
+      << "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: 'tetra.blend'\n"
+         "element vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face 4\nproperty list uchar uint vertex_indices\nend_header\n"
+         "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  const auto result = testing::run_visproxy("info --json '" + path.string() + "'");
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.err, "visproxy: warning: " + path.string() +
+                            ":3: unknown header line 'Created by Blender3D 247 - www.blender.org, source file: "
+                            "'tetra.blend'' ignored\n");
+  const nlohmann::json json = nlohmann::json::parse(result.out);
+  EXPECT_EQ(json.at("vertices"), 4);
+  EXPECT_EQ(json.at("triangles"), 4);
+  EXPECT_EQ(json.at("watertight"), true);
 }
 
 }  // namespace

@@ -68,7 +68,7 @@ TEST_F(CliVerifyMeasure, EveryClaimHoldsAndIsRecorded) {
 // pokes out of the proxy. For the wrap, one vertex pushed just beneath the mesh's surface:
 // its triangles cross the mesh while every mesh vertex stays inside. Both must fail, naming the proxy and the counterexample.
 TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
-  TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never, .on_warning = {}});
   const BoundingBox box = bounding_box(hull);
   const Vertex centre = 0.5 * (box.min + box.max);
   hull.positions[0] = centre + 0.97 * (hull.positions[0] - centre);
@@ -78,7 +78,7 @@ TEST_F(CliVerifyMeasure, ProxyEditedToLetTheMeshOutFails) {
   const Triangle& t = mesh.triangles[100];
   const Vertex a = mesh.positions[t[0]], b = mesh.positions[t[1]], c = mesh.positions[t[2]];
   const Vertex inside = (a + b + c) / 3 - 1e-3 * box.diagonal() * (b - a).cross(c - a).normalized();
-  TriangleMesh wrap = read_mesh(proxies_ / "wrap.ply", {.weld = Weld::never});
+  TriangleMesh wrap = read_mesh(proxies_ / "wrap.ply", {.weld = Weld::never, .on_warning = {}});
   std::size_t nearest = 0;
   for (std::size_t v = 0; v < wrap.positions.size(); ++v)
     if ((wrap.positions[v] - inside).norm() < (wrap.positions[nearest] - inside).norm()) nearest = v;
@@ -129,7 +129,7 @@ class CliVerifyEdited : public testing::ScratchFolder {
 };
 
 TEST_F(CliVerifyEdited, HullWithATriangleRemovedIsNotClosed) {
-  TriangleMesh open = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  TriangleMesh open = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never, .on_warning = {}});
   open.triangles.pop_back();
   edit(open);
   const auto result = verify();
@@ -153,7 +153,7 @@ TEST_F(CliVerifyEdited, DentedHullFailsThoughEveryVertexIsOnIt) {
 // The verdict follows the file, not the name: the true hull passes under any spec, and a
 // non-convex proxy is not passed for being called a hull.
 TEST_F(CliVerifyEdited, VerdictDoesNotDependOnTheSpecInTheManifest) {
-  const TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never});
+  const TriangleMesh hull = read_mesh(proxies_ / "hull.ply", {.weld = Weld::never, .on_warning = {}});
   for (const std::string spec : {"wrap", "outer:512", "hull"}) {
     edit(hull, spec);
     const auto result = verify();

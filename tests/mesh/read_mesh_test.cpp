@@ -21,7 +21,7 @@ TriangleMesh sample_mesh() {
 }
 
 TriangleMesh parse(std::string_view bytes, MeshFormat format, Weld weld = Weld::never) {
-  return parse_mesh(bytes, format, "memory", {.weld = weld});
+  return parse_mesh(bytes, format, "memory", {.weld = weld, .on_warning = {}});
 }
 
 TEST(ReadMesh, PlyRoundTripsEveryEncodingAndScalarType) {
@@ -45,6 +45,74 @@ TEST(ReadMesh, PlyIntegerCoordinates) {
   EXPECT_EQ(parse(testing::encode_ply_variant(cube, {.encoding = PlyEncoding::big_endian, .coordinate_type = "short"}),
                   MeshFormat::ply),
             cube);
+}
+
+// Blender 2.4x writes a line that is no PLY keyword after `format`; it is skipped with one
+// warning naming the file and the line, in every encoding.
+TEST(ReadMesh, PlyBlender24xHeaderLineIsIgnoredWithAWarning) {
+  const TriangleMesh mesh = sample_mesh();
+  const std::string blender_line = "Created by Blender3D 247 - www.blender.org, source file: 'cube.blend'";
+  for (const PlyEncoding encoding : {PlyEncoding::ascii, PlyEncoding::little_endian}) {
+    SCOPED_TRACE(encoding == PlyEncoding::ascii ? "ascii" : "binary");
+    std::string bytes = testing::encode_ply_variant(mesh, {.encoding = encoding});
+    const std::size_t comment = bytes.find("comment test\n");
+    ASSERT_NE(comment, std::string::npos);
+    bytes.replace(comment, std::string("comment test").size(), blender_line + "\r");  // and a CRLF ending
+    std::vector<std::string> warnings;
+    const TriangleMesh read = parse_mesh(
+        bytes, MeshFormat::ply, "blender.ply",
+        {.weld = Weld::never, .on_warning = [&](const std::string& warning) { warnings.push_back(warning); }});
+    EXPECT_EQ(read.positions.size(), mesh.positions.size());
+    EXPECT_EQ(read.triangles.size(), mesh.triangles.size());
+    EXPECT_EQ(read, mesh);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_EQ(warnings[0], "blender.ply:3: unknown header line '" + blender_line + "' ignored");
+  }
+}
+
+TEST(ReadMesh, PlyWarningsAreCappedAndNotGivenForAFileThatIsNoPly) {
+  std::string header = "ply\nformat ascii 1.0\n";
+  for (int i = 0; i < 20; ++i) header += "junk " + std::to_string(i) + "\n";
+  const std::string body =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  std::vector<std::string> warnings;
+  const ReadMeshOptions options{.weld = Weld::automatic,
+                                .on_warning = [&](const std::string& warning) { warnings.push_back(warning); }};
+  EXPECT_EQ(parse_mesh(header + body, MeshFormat::ply, "junk.ply", options).triangles.size(), 1u);
+  ASSERT_EQ(warnings.size(), 9u);
+  EXPECT_EQ(warnings[0], "junk.ply:3: unknown header line 'junk 0' ignored");
+  EXPECT_EQ(warnings[7], "junk.ply:10: unknown header line 'junk 7' ignored");
+  EXPECT_EQ(warnings[8], "junk.ply: 12 more unknown header lines ignored");
+
+  warnings.clear();
+  EXPECT_THROW(parse_mesh(header, MeshFormat::ply, "junk.ply", options), InvalidInputError);
+  EXPECT_TRUE(warnings.empty()) << "a header without end_header is an error, not a list of warnings";
+}
+
+TEST(ReadMesh, PlyMalformedKeywordLinesAreStillErrors) {
+  const std::string tail =
+      "property float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"ply\nformat ascii 1.0\nelement vertex abc\n" + tail,
+       "broken.ply:3: expected the element count (a non-negative integer), found 'abc'"},
+      {"ply\nformat ascii 1.0\nelement\n" + tail, "broken.ply:3: element without a name"},
+      {"ply\nformat ascii 1.0\nelement vertex 3\nproperty float128 x\n" + tail,
+       "broken.ply:4: unknown property type 'float128'"},
+      {"ply\nformat ascii 2.0\nelement vertex 3\n" + tail, "broken.ply:2: unsupported PLY version (only 1.0)"},
+  };
+  for (const auto& [bytes, message] : cases) {
+    std::vector<std::string> warnings;
+    try {
+      parse_mesh(bytes, MeshFormat::ply, "broken.ply",
+                 {.weld = Weld::automatic, .on_warning = [&](const std::string& w) { warnings.push_back(w); }});
+      ADD_FAILURE() << "accepted " << bytes;
+    } catch (const InvalidInputError& error) {
+      EXPECT_EQ(std::string(error.what()), message);
+    }
+    EXPECT_TRUE(warnings.empty());
+  }
 }
 
 TEST(ReadMesh, OffRoundTrips) {

@@ -27,13 +27,19 @@ TEST_F(SphereSetFile, RoundTripsEveryDoubleExactly) {
 TEST_F(SphereSetFile, RejectsMalformedFilesNamingTheProblem) {
   const auto path = folder_ / "bad.json";
   const std::pair<const char*, const char*> cases[] = {
-      {"{\"spheres\": [", "not valid JSON"},
-      {"[1, 2]", "\"spheres\" array"},
-      {"{\"spheres\": [{\"center\": [0, 0], \"radius\": 1}]}", "3 numbers"},
-      {"{\"spheres\": [{\"center\": [0, 0, 0]}]}", "needs \"center\" and \"radius\""},
-      {"{\"spheres\": [{\"center\": [0, 0, \"x\"], \"radius\": 1}]}", "not a number"},
-      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": -1}]}", "negative radius"},
-      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1e999}]}", "not valid JSON"},  // overflows
+      {"{\"spheres\": [", ":1: not valid JSON"},
+      {"[1, 2]", "bad.json: expected an object with a \"spheres\" array"},
+      {"{\"spheres\": {}}", "bad.json: spheres: expected an array of spheres"},
+      {"{\"spheres\": [{\"center\": [0, 0], \"radius\": 1}]}",
+       "bad.json: spheres[0].center: expected an array of 3 numbers"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}, {\"center\": [0, 0, 0]}]}",
+       "bad.json: spheres[1]: missing \"radius\""},
+      {"{\"spheres\": [{\"center\": [0, 0, \"x\"], \"radius\": 1}]}",
+       "bad.json: spheres[0].center: expected an array of 3 numbers"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": \"1\"}]}", "bad.json: spheres[0].radius: expected a number"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": -1}]}", "bad.json: spheres[0].radius: must not be negative"},
+      {"{\"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1e999}]}", "bad.json: not valid JSON"},  // overflows
+      {"{\"spheres\": [7]}", "bad.json: spheres[0]: expected an object"},
   };
   for (const auto& [text, problem] : cases) {
     write_file_atomically(path, text);

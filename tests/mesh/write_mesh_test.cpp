@@ -29,7 +29,7 @@ TEST_F(WriteMesh, PlyAndObjRoundTripExactly) {
   for (const char* name : {"mesh.ply", "mesh.obj"}) {
     const auto path = folder_ / name;
     write_mesh(path, mesh);
-    EXPECT_EQ(read_mesh(path, {.weld = Weld::never}), mesh) << name;
+    EXPECT_EQ(read_mesh(path, {.weld = Weld::never, .on_warning = {}}), mesh) << name;
   }
 }
 

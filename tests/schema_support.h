@@ -1,0 +1,61 @@
+#pragma once
+// The JSON schemas in data/schemas, read for tests that check files against them.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/files.h"
+
+namespace visproxy::testing {
+
+inline nlohmann::json read_schema(const std::string& name) {
+  return nlohmann::json::parse(read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/schemas" / name));
+}
+
+/// A structural check of `value` against `part` of `schema`: every required key present,
+/// every key of an object described (by "properties" or "additionalProperties"), constants
+/// and enumerations matched, arrays' items checked, "$ref"s within the schema followed.
+/// Alternatives ("oneOf") are not descended into.
+inline void expect_described(const nlohmann::json& value, const nlohmann::json& schema, const nlohmann::json& part,
+                             const std::string& where) {
+  if (part.contains("$ref")) {
+    const std::string ref = part.at("$ref");  // "#/$defs/NAME"
+    return expect_described(value, schema, schema.at("$defs").at(ref.substr(ref.rfind('/') + 1)), where);
+  }
+  if (part.contains("const")) {
+    EXPECT_EQ(value, part.at("const")) << where;
+  }
+  if (part.contains("enum")) {
+    const auto& options = part.at("enum");
+    EXPECT_NE(std::find(options.begin(), options.end(), value), options.end()) << where << " = " << value;
+  }
+  if (value.is_object()) {
+    if (part.contains("required")) {
+      for (const auto& key : part.at("required"))
+        EXPECT_TRUE(value.contains(key.get<std::string>())) << where << "." << key;
+    }
+    for (const auto& [key, item] : value.items()) {
+      if (part.contains("properties") && part.at("properties").contains(key)) {
+        expect_described(item, schema, part.at("properties").at(key), where + "." + key);
+      } else if (part.contains("additionalProperties")) {
+        expect_described(item, schema, part.at("additionalProperties"), where + "." + key);
+      } else {
+        ADD_FAILURE() << where << "." << key << " is not described by the schema";
+      }
+    }
+  } else if (value.is_array() && part.contains("items")) {
+    for (std::size_t i = 0; i < value.size(); ++i)
+      expect_described(value[i], schema, part.at("items"), where + "[" + std::to_string(i) + "]");
+  }
+}
+
+inline void expect_described(const nlohmann::json& value, const std::string& schema_name) {
+  const nlohmann::json schema = read_schema(schema_name);
+  expect_described(value, schema, schema, schema_name);
+}
+
+}  // namespace visproxy::testing
