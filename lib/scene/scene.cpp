@@ -70,8 +70,11 @@ class Parser : public JsonInput {
     if (!positions.is_array()) fail(positions_path, "expected an array of points");
     const json& triangles = member(value, "triangles", where);
     if (!triangles.is_array() || triangles.empty()) fail(triangles_path, "expected a non-empty array of triangles");
-    for (std::size_t v = 0; v < positions.size(); ++v)
+    for (std::size_t v = 0; v < positions.size(); ++v) {
       mesh.positions.push_back(vector3(positions[v], json_index_path(positions_path, v)));
+      if (!(mesh.positions.back().cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        fail(json_index_path(positions_path, v), "a coordinate beyond 1e100 in magnitude, which geometry in double precision cannot square and cube");
+    }
     for (std::size_t t = 0; t < triangles.size(); ++t) {
       const json& corners = triangles[t];
       const std::string triangle_path = json_index_path(triangles_path, t);
@@ -191,8 +194,16 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
     SceneInstance instance;
     const SceneMesh& mesh = find_mesh(p.member(value, "mesh", where), json_member_path(where, "mesh"));
     instance.mesh = mesh.name;
-    if (const json* transform = p.optional_member(value, "transform", where))
+    if (const json* transform = p.optional_member(value, "transform", where)) {
       instance.transform = p.transform(*transform, json_member_path(where, "transform"), mesh.mesh);
+      const BoundingBox box = bounding_box(mesh.mesh);
+      for (int corner = 0; corner < 8 && !box.empty(); ++corner) {
+        const Vertex placed = instance.transform * Vertex(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
+                                                          corner & 4 ? box.max.z() : box.min.z());
+        if (!(placed.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+          p.fail(json_member_path(where, "transform"), "places the mesh beyond 1e100 in magnitude, which geometry in double precision cannot square and cube");
+      }
+    }
     if (const json* albedo = p.optional_member(value, "albedo", where)) {
       instance.albedo = p.color(*albedo, json_member_path(where, "albedo"));
       if ((instance.albedo.array() > 1).any())

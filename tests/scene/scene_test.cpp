@@ -159,6 +159,12 @@ INSTANTIATE_TEST_SUITE_P(
                   "/instances/1/transform",
                   {{"scale", {1e300, 1e-300, 1e300}}, {"fit", {{"base", {0, 0, 0}}, {"height", 0.5}}}},
                   "instances[1].transform: not finite (the product overflows)"},
+        Malformed{"position_beyond_1e100", "/meshes/floor/positions/1", json::array({1, 0, 2e100}),
+                  "meshes.floor.positions[1]: a coordinate beyond 1e100 in magnitude, which geometry in double "
+                  "precision cannot square and cube"},
+        Malformed{"placed_beyond_1e100", "/instances/0/transform/matrix/3", 1e101,
+                  "instances[0].transform: places the mesh beyond 1e100 in magnitude, which geometry in double "
+                  "precision cannot square and cube"},
         Malformed{"two_sided_text", "/lights/1/two_sided", "yes", "lights[1].two_sided: must be true or false"},
         Malformed{"light_type_unknown", "/lights/0/type", "spot",
                   "lights[0].type: must be \"parallelogram\" or \"mesh\""},
