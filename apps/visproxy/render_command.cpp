@@ -21,6 +21,13 @@ struct RenderCommandOptions {
   std::filesystem::path scene;
   std::filesystem::path output;
   VisibilityMode visibility = VisibilityMode::exact;
+  IntegratorKind integrator = IntegratorKind::direct;
+  int vpls = 1024;
+  int bounces = 1;
+  std::uint64_t vpl_seed = 1;
+  double vpl_clamp = 0.05;
+  SelfShadow self_shadow = SelfShadow::heuristic;
+  bool single_rays = false;
   ProbabilityMode probabilities = ProbabilityMode::equal;
   StochasticEstimator estimator = StochasticEstimator::term_choice;
   int probe_passes = 0;
@@ -53,18 +60,43 @@ void add_render_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<RenderCommandOptions>();
   CLI::App* command = app.add_subcommand(
       "render",
-      "Render a scene with direct illumination from its area lights (Lambertian surfaces, M shadow rays per camera "
-      "sample). Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
+      "Render a scene lit by its area lights (Lambertian surfaces): direct illumination with M shadow rays per camera "
+      "sample, or with --integrator vpl also the indirect light of N virtual point lights. Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
       "names that are not in the cache yet.");
   command->add_option("scene", o->scene, "Scene file (JSON; format in README.md, schema data/schemas/scene.schema.json)")->required();
   command->add_option("-o,--output", o->output, "Output image: .pfm or .exr (linear radiance)")->required();
-  const std::map<std::string, VisibilityMode> modes{
-      {"exact", VisibilityMode::exact}, {"stochastic", VisibilityMode::stochastic}, {"bounds", VisibilityMode::bounds}};
+  const std::map<std::string, VisibilityMode> modes{{"exact", VisibilityMode::exact},
+                                                    {"stochastic", VisibilityMode::stochastic},
+                                                    {"bounds", VisibilityMode::bounds},
+                                                    {"spheres", VisibilityMode::spheres}};
   command
       ->add_option("--visibility", o->visibility,
                    "exact: every shadow ray against the meshes; stochastic: the unbiased estimator with each instance's "
-                   "proxy (own instance exact); bounds: exact answer, proxies only skip work [default: exact]")
+                   "proxy (own instance exact); bounds: exact answer, proxies only skip work (VPL connections are traced "
+                   "exactly); spheres: each instance's sphere-set proxy as occluder disks, biased by design (instances "
+                   "without one traced exactly) [default: exact]")
       ->transform(CLI::CheckedTransformer(modes, CLI::ignore_case));
+  const std::map<std::string, IntegratorKind> integrators{{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}};
+  command
+      ->add_option("--integrator", o->integrator,
+                   "direct: M area-light samples per camera sample; vpl: those plus every virtual point light left by N "
+                   "light paths of B bounces (instant radiosity) [default: direct]")
+      ->transform(CLI::CheckedTransformer(integrators, CLI::ignore_case));
+  command->add_option("--vpls", o->vpls, "vpl: light paths traced from the area lights (N) [default: 1024]")->check(CLI::Range(1, 1 << 22));
+  command->add_option("--bounces", o->bounces, "vpl: diffuse hits per light path that leave a VPL (B) [default: 1]")->check(CLI::Range(1, 64));
+  command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, apart from --seed so that a reference can share the VPLs [default: 1]");
+  command->add_option("--vpl-clamp", o->vpl_clamp,
+                      "vpl: clamp each VPL's geometric term cos cos / d^2 to 1 / (C x D)^2, D the scene's diagonal; the energy "
+                      "dropped is in the stats (0: no clamp) [default: 0.05]")
+      ->check(CLI::Range(0.0, 1.0));
+  const std::map<std::string, SelfShadow> self_shadows{
+      {"heuristic", SelfShadow::heuristic}, {"exact", SelfShadow::exact}, {"none", SelfShadow::none}};
+  command
+      ->add_option("--self-shadow", o->self_shadow,
+                   "spheres: heuristic skips the own instance's spheres closer than twice their radius (t < 2R); exact traces "
+                   "the own instance's mesh instead of its spheres; none uses all its spheres [default: heuristic]")
+      ->transform(CLI::CheckedTransformer(self_shadows, CLI::ignore_case));
+  command->add_flag("--single-rays", o->single_rays, "vpl: trace the connections of a shading point one ray at a time, not as packets");
   const std::map<std::string, ProbabilityMode> probability_modes{
       {"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}};
   command
@@ -140,7 +172,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
                                                  : prepare_scene_proxies(scene, proxy_options);
     const RenderWorld world(scene, proxies, {.counting = o->count});
     for (const std::string& note : world.notes()) std::cerr << "visproxy render: note: " << note << "\n";
-    RenderOptions options{.visibility = o->visibility,
+    RenderOptions options{.integrator = o->integrator,
+                          .visibility = o->visibility,
                           .probabilities = o->probabilities,
                           .estimator = o->estimator,
                           .cost_heuristic = o->cost_heuristic,
@@ -152,6 +185,13 @@ void add_render_command(CLI::App& app, int& exit_code) {
                           .spp = o->spp,
                           .shadow_rays = o->shadow_rays,
                           .seed = o->seed,
+                          .vpls = o->vpls,
+                          .bounces = o->bounces,
+                          .vpl_seed = o->vpl_seed,
+                          .vpl_clamp = o->vpl_clamp,
+                          .virtual_point_lights = nullptr,
+                          .group_connections = !o->single_rays,
+                          .self_shadow = o->self_shadow,
                           .seconds = o->seconds,
                           .on_pass = nullptr};
     if (terminal)
@@ -190,7 +230,9 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"image", o->output.string()},
         {"width", scene.camera.width},
         {"height", scene.camera.height},
+        {"integrator", integrator_name(o->integrator)},
         {"visibility", visibility_mode_name(o->visibility)},
+        {"self_shadow", self_shadow_name(o->self_shadow)},
         {"probabilities", probability_mode_name(o->probabilities)},
         {"estimator", stochastic_estimator_name(o->estimator)},
         {"cost_heuristic", o->cost_heuristic},
@@ -207,14 +249,24 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"proxy_notes", world.notes()},
         {"stats", result.stats.to_json()}};
     write_file_atomically(stats, document.dump(2) + "\n");
-    std::printf("visproxy render: %s, %dx%d, %s visibility, %d spp x %d shadow rays, seed %llu: %.2f s, %llu shadow rays "
-                "(%.2f exact and %.2f proxy tests per shadow ray)\n  %s\n  %s\n  %s\n",
+    std::string vpl_text;
+    if (o->integrator == IntegratorKind::vpl) {
+      char text[200];
+      std::snprintf(text, sizeof text, ", %llu VPLs (%llu connections; clamping dropped %.3f %% of their energy)",
+                    static_cast<unsigned long long>(result.stats.integrator.value("virtual_point_lights", 0ull)),
+                    static_cast<unsigned long long>(result.stats.vpl_connections),
+                    100 * result.stats.integrator.value("clamped_energy_fraction", 0.0));
+      vpl_text = text;
+    }
+    std::printf("visproxy render: %s, %dx%d, %s integrator, %s visibility, %d spp x %d shadow rays, seed %llu: %.2f s, %llu shadow rays "
+                "(%.2f exact and %.2f proxy tests per shadow ray)%s\n  %s\n  %s\n  %s\n",
                 o->scene.string().c_str(), scene.camera.width, scene.camera.height,
+                std::string(integrator_name(o->integrator)).c_str(),
                 std::string(visibility_mode_name(o->visibility)).c_str(), result.stats.passes, o->shadow_rays,
                 static_cast<unsigned long long>(o->seed), result.stats.seconds,
                 static_cast<unsigned long long>(result.stats.shadow_rays),
                 result.stats.to_json()["exact_tests_per_shadow_ray"].get<double>(),
-                result.stats.to_json()["proxy_tests_per_shadow_ray"].get<double>(), o->output.string().c_str(),
+                result.stats.to_json()["proxy_tests_per_shadow_ray"].get<double>(), vpl_text.c_str(), o->output.string().c_str(),
                 png.string().c_str(), stats.string().c_str());
     exit_code = all_finite(result.image) ? kSuccess : kInternalError;
     if (exit_code != kSuccess) std::cerr << "visproxy render: the image holds NaN or infinite values\n";

@@ -169,6 +169,8 @@ struct RenderWorld::Impl {
   std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
   std::vector<std::string> notes;
+  std::vector<std::vector<Sphere>> occluder_spheres;  // per instance, world space
+  int packet = 1;  // width of the packets grouped queries use
 
   ~Impl() {
     for (RTCScene scene : owned) rtcReleaseScene(scene);
@@ -285,6 +287,65 @@ struct RenderWorld::Impl {
     return ray.tfar == -std::numeric_limits<float>::infinity();
   }
 
+  // blocked() for segments from one origin, `packet` rays at a time (the same answers: each
+  // lane is one segment ray with the same mask and filter).
+  template <typename RayN, int N>
+  void blocked_packets(RTCScene scene, const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> out,
+                       const InstanceFilter& filter, void (*occluded)(const int*, RTCScene, RTCIntersectContext*, RayN*)) const {
+    FilterContext context;
+    rtcInitIntersectContext(&context.context);
+    context.filter = filter;
+    const bool shared_bit = (filter.only >= 0 || filter.skip >= 0) && instance_count > 31;
+    context.context.filter = shared_bit || !masks ? instance_filter : nullptr;
+    const unsigned mask = query_mask(filter);
+    const Vertex origin_here = from - origin;
+    const float ox = static_cast<float>(origin_here.x()), oy = static_cast<float>(origin_here.y()), oz = static_cast<float>(origin_here.z());
+    for (std::size_t base = 0; base < ends.size(); base += N) {
+      alignas(64) int valid[N];
+      alignas(64) RayN rays;
+      bool any = false;
+      for (int lane = 0; lane < N; ++lane) {
+        const std::size_t i = base + static_cast<std::size_t>(lane);
+        valid[lane] = i < ends.size() && out[i] == 0 ? -1 : 0;
+        if (valid[lane] == 0) continue;
+        any = true;
+        const Vertex direction = (ends[i] - origin) - origin_here;
+        rays.org_x[lane] = ox, rays.org_y[lane] = oy, rays.org_z[lane] = oz;
+        rays.dir_x[lane] = static_cast<float>(direction.x());
+        rays.dir_y[lane] = static_cast<float>(direction.y());
+        rays.dir_z[lane] = static_cast<float>(direction.z());
+        rays.tnear[lane] = 0.0f, rays.tfar[lane] = 1.0f, rays.time[lane] = 0.0f;
+        rays.mask[lane] = mask, rays.id[lane] = 0, rays.flags[lane] = 0;
+      }
+      if (!any) continue;
+      occluded(valid, scene, &context.context, &rays);
+      for (int lane = 0; lane < N; ++lane)
+        if (valid[lane] != 0 && rays.tfar[lane] == -std::numeric_limits<float>::infinity()) out[base + static_cast<std::size_t>(lane)] = 1;
+    }
+  }
+
+  void blocked_group(RTCScene scene, const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> out,
+                     const InstanceFilter& filter) const {
+    std::fill(out.begin(), out.end(), std::uint8_t{0});
+    if (counting || packet == 1) {
+      for (std::size_t i = 0; i < ends.size(); ++i) out[i] = blocked(scene, from, ends[i], filter) ? 1 : 0;
+      return;
+    }
+    if (const auto it = convex.find(scene); it != convex.end())
+      for (std::size_t i = 0; i < ends.size(); ++i)
+        for (const ConvexInstance& instance : it->second)
+          if (filter_passes(instance.id, filter) && instance.world.meets_segment(from, ends[i])) {
+            out[i] = 1;
+            break;
+          }
+    const auto masks_here = embree_masks.find(scene);
+    if (masks_here == embree_masks.end() || (masks_here->second & query_mask(filter)) == 0) return;
+    if (packet == 8)
+      blocked_packets<RTCRay8, 8>(scene, from, ends, out, filter, &rtcOccluded8);
+    else
+      blocked_packets<RTCRay4, 4>(scene, from, ends, out, filter, &rtcOccluded4);
+  }
+
   // Whether every light lies outside the solid of `solid` (a closed mesh, placed in the
   // world by `transform`) by more than `margin`: no light triangle comes within the margin
   // of its surface, so each stays in one region of constant winding number, and every
@@ -367,6 +428,9 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
   Impl& w = *impl_;
   w.counting = options.counting;
   w.masks = options.ray_masks && rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
+  w.packet = rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0   ? 8
+             : rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) != 0 ? 4
+                                                                                                   : 1;
   if (proxies.size() != scene.instances.size()) throw Error("render: one proxy set per scene instance expected");
   w.instance_count = scene.instances.size();
 
@@ -493,6 +557,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       w.add_instance(w.proxy, mesh_scene(instance.mesh), object_to_world, id, mask);
     }
     w.is_exact.push_back(!p.stochastic.has_value());
+    std::vector<Sphere> occluders;
+    if (p.stochastic)
+      for (const Sphere& ball : p.stochastic->spheres) occluders.push_back({instance.transform * ball.center, ball.radius * scales(0)});
+    w.occluder_spheres.push_back(std::move(occluders));
     w.stochastic_kinds.push_back(kind);
 
     // Outside (bounds): a usable outside proxy, else the mesh itself (a clipped solid when
@@ -604,6 +672,14 @@ double RenderWorld::surface_offset(const Vertex& point, double distance) const {
 bool RenderWorld::mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->camera, from, to, filter);
 }
+void RenderWorld::mesh_blocks(const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> blocked,
+                              InstanceFilter filter) const {
+  if (blocked.size() != ends.size()) throw Error("RenderWorld::mesh_blocks: one answer per segment end is needed");
+  impl_->blocked_group(impl_->camera, from, ends, blocked, filter);
+}
+int RenderWorld::packet_width() const { return impl_->counting ? 1 : impl_->packet; }
+const std::vector<Sphere>& RenderWorld::occluder_spheres(std::size_t instance) const { return impl_->occluder_spheres[instance]; }
+
 bool RenderWorld::proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->proxy, from, to, filter);
 }

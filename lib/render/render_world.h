@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -116,6 +117,12 @@ class RenderWorld {
   /// Whether the open segment is blocked by the exact geometry of the instances the filter
   /// lets through (lights never block).
   bool mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
+  /// mesh_blocks for a group of segments from one origin: blocked[i] for from to ends[i]
+  /// (blocked.size() == ends.size()). Traced as packets of 8 (or 4) rays where Embree has
+  /// them natively; the answers equal those of single queries.
+  void mesh_blocks(const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> blocked, InstanceFilter filter = {}) const;
+  /// The packet width mesh_blocks of a group uses (1: single rays).
+  int packet_width() const;
   /// The same against each instance's stochastic proxy (its mesh where it has none). The
   /// segment must end on a light (`to`) for the proxies' kinds to hold.
   bool proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
@@ -133,6 +140,11 @@ class RenderWorld {
   /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
+
+  /// World-space balls of the instance's stochastic proxy when it is a sphere set (each
+  /// radius scaled by the transform's largest stretch, so it holds its transformed ball),
+  /// else empty: the occluders of `spheres` visibility.
+  const std::vector<Sphere>& occluder_spheres(std::size_t instance) const;
 
   /// Whether any instance has a usable inside proxy (else inside_blocks is always false).
   bool has_inside_proxies() const;

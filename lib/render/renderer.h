@@ -1,6 +1,8 @@
 #pragma once
-// Direct illumination from area lights on Lambertian surfaces (Billen et al. eq. 21), with
-// exact, stochastic (eq. 8, visibility splitting eq. 27) or bounded shadow tests.
+// The renderer: Lambertian surfaces lit by area lights, through an integrator (direct
+// illumination, Billen et al. eq. 21; or instant radiosity with virtual point lights) whose
+// shadow segments a visibility strategy answers: exact, stochastic (eq. 8 or the control
+// variate, visibility splitting eq. 27), bounds, or occluder disks of sphere sets.
 
 #include <atomic>
 #include <cstdint>
@@ -11,10 +13,21 @@
 #include "estimator/probabilities.h"
 #include "render/image.h"
 #include "render/render_world.h"
+#include "render/virtual_point_lights.h"
 
 namespace visproxy {
 
-enum class VisibilityMode { exact, stochastic, bounds };
+/// spheres: each instance's sphere-set proxy as occluder disks (occluding-spheres paper §2,
+/// biased by design); instances without one are traced exactly.
+enum class VisibilityMode { exact, stochastic, bounds, spheres };
+/// direct: M area-light samples per camera sample; vpl: those plus every virtual point light.
+enum class IntegratorKind { direct, vpl };
+std::string_view integrator_name(IntegratorKind integrator);
+/// spheres: how the shading point's own instance shadows it (occluding-spheres §4.2).
+/// heuristic: its spheres count except those closer than twice their radius (t < 2R);
+/// exact: its mesh is traced and its spheres are left out; none: all its spheres count.
+enum class SelfShadow { heuristic, exact, none };
+std::string_view self_shadow_name(SelfShadow self_shadow);
 /// equal; adaptive: from K probe rays per shading point (or per pixel, probe_passes);
 /// learned (control variate only): from the corrections each pixel traced in earlier samples.
 enum class ProbabilityMode { equal, adaptive, learned };
@@ -26,6 +39,7 @@ std::string_view stochastic_estimator_name(StochasticEstimator estimator);
 std::string_view visibility_mode_name(VisibilityMode mode);
 
 struct RenderOptions {
+  IntegratorKind integrator = IntegratorKind::direct;
   VisibilityMode visibility = VisibilityMode::exact;
   ProbabilityMode probabilities = ProbabilityMode::equal;
   StochasticEstimator estimator = StochasticEstimator::term_choice;
@@ -41,6 +55,20 @@ struct RenderOptions {
   int spp = 16;                    ///< camera samples per pixel (passes)
   int shadow_rays = 1;             ///< M: light samples per camera sample
   std::uint64_t seed = 1;
+  // vpl integrator
+  int vpls = 1024;                 ///< N: light paths traced from the area lights
+  int bounces = 1;                 ///< B: VPLs left per path (1: one-bounce indirect light)
+  std::uint64_t vpl_seed = 1;      ///< seed of the light paths (apart from `seed`, so that a reference can share the VPLs)
+  /// The VPLs' geometric term cos cos / d^2 is clamped to 1 / (vpl_clamp x D)^2, D the
+  /// diagonal of the scene's bounds: the energy of connections shorter than about
+  /// vpl_clamp x D is dropped (RenderStats::integrator: clamped_energy_fraction). 0: no clamp.
+  double vpl_clamp = 0.05;
+  /// Use these VPLs instead of tracing light paths (a renderer's own, or a test's).
+  const std::vector<VirtualPointLight>* virtual_point_lights = nullptr;
+  /// Connections from a shading point to its VPLs traced as groups of rays from one origin
+  /// (Embree ray packets) where the strategy can; false: one ray at a time.
+  bool group_connections = true;
+  SelfShadow self_shadow = SelfShadow::heuristic;  ///< spheres visibility
   double seconds = 0;              ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;
@@ -66,6 +94,9 @@ struct RenderStats {
   std::uint64_t corrections_after_miss = 0, corrections_after_hit = 0;
   std::uint64_t bounds_unoccluded = 0, bounds_occluded = 0, bounds_traced = 0;
   std::uint64_t shafts_culled = 0;  ///< bounds: shading points whose light shaft missed every other instance
+  std::uint64_t vpl_connections = 0;  ///< vpl: segments from shading points to VPLs (not in shadow_rays)
+  std::uint64_t disk_tests = 0;       ///< spheres: sphere disks compared with a segment
+  nlohmann::json integrator;          ///< what the integrator reports (vpl: the VPLs, the clamp, the energy it dropped)
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries

@@ -1,0 +1,48 @@
+// Direct illumination from area lights on Lambertian surfaces (Billen et al. eq. 21):
+// M points on the lights by area, each segment's visibility from the strategy.
+
+#include "render/integrators/integrator.h"
+
+namespace visproxy {
+namespace {
+
+class DirectIntegrator final : public Integrator {
+ public:
+  explicit DirectIntegrator(const IntegratorContext& context) : context_(context) {}
+
+  Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const override {
+    return brdf.cwiseProduct(direct_light(context_, point, random, visibility)) / context_.options.shadow_rays;
+  }
+
+ private:
+  IntegratorContext context_;
+};
+
+}  // namespace
+
+Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility) {
+  const LightSampler& lights = context.lights;
+  RenderStats& stats = *point.stats;
+  const Vertex& x = point.position;
+  Color radiance = Color::Zero();
+  for (int s = 0; s < context.options.shadow_rays; ++s) {
+    const LightSample y = lights.sample(random);
+    const Vertex to_light = y.position - x;
+    const double distance2 = to_light.squaredNorm();
+    const double distance = std::sqrt(distance2);
+    const double cos_x = point.hit->normal.dot(to_light) / distance;
+    double cos_y = -y.normal.dot(to_light) / distance;
+    if (y.two_sided) cos_y = std::abs(cos_y);
+    if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) continue;
+    ++stats.shadow_rays;
+    const double v = visibility.to_light(light_end(context.world, y, x));
+    if (v != 0) radiance += (v * cos_x * cos_y / distance2 * lights.total_area()) * y.radiance;
+  }
+  return radiance;
+}
+
+std::unique_ptr<Integrator> make_direct_integrator(const IntegratorContext& context) {
+  return std::make_unique<DirectIntegrator>(context);
+}
+
+}  // namespace visproxy

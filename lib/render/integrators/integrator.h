@@ -1,0 +1,40 @@
+#pragma once
+// Integrators: the light a shading point reflects towards the camera, with every shadow
+// segment answered by a visibility strategy (render/visibility).
+
+#include <memory>
+
+#include "render/visibility/visibility.h"
+
+namespace visproxy {
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  /// Reflected radiance at `point` (a surface, not a light) towards the camera, for a
+  /// Lambertian BRDF `brdf` (albedo / pi). Light samples come from `random`; the
+  /// visibility strategy has been begun at `point`.
+  virtual Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const = 0;
+  /// One line per fact a reader of the image needs (the VPLs made, the energy clamped), for
+  /// the stats.
+  virtual nlohmann::json describe() const { return nlohmann::json::object(); }
+};
+
+struct IntegratorContext {
+  const Scene& scene;
+  const RenderWorld& world;
+  const RenderOptions& options;
+  const LightSampler& lights;
+};
+
+/// The sum over M light samples (context.options.shadow_rays) of Le V cos_x cos_y / d^2
+/// times the lights' total area: divided by M, an unbiased estimate of the irradiance the
+/// area lights give `point`.
+Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility);
+
+/// Direct illumination from the area lights (Billen et al. eq. 21): M light samples by area.
+std::unique_ptr<Integrator> make_direct_integrator(const IntegratorContext& context);
+/// Instant radiosity: M light samples plus every virtual point light.
+std::unique_ptr<Integrator> make_vpl_integrator(const IntegratorContext& context);
+
+}  // namespace visproxy

@@ -1,0 +1,48 @@
+#pragma once
+// Virtual point lights (instant radiosity, Keller 1997): light paths traced from the area
+// lights leave a point light at each diffuse hit, which then lights the scene as the
+// indirect illumination of those paths.
+
+#include <cstdint>
+#include <vector>
+
+#include "render/render_world.h"
+#include "render/sampling.h"
+#include "scene/scene.h"
+
+namespace visproxy {
+
+struct VirtualPointLight {
+  Vertex position;  ///< on the surface (not moved off it)
+  Vertex normal;    ///< unit, towards the side the light arrived from
+  Color power;      ///< flux the path carries to the point, watts-like units of the scene's radiance x area x sr
+  Color brdf;       ///< the surface's Lambertian BRDF there: albedo / pi
+  int instance = -1;
+  int bounce = 1;   ///< 1 at the path's first hit
+};
+
+struct VplOptions {
+  int paths = 1024;         ///< N: light paths traced
+  int bounces = 1;          ///< B: hits per path that leave a light (1: one-bounce indirect)
+  std::uint64_t seed = 1;
+};
+
+/// Traces `options.paths` light paths: a point on the lights by area, a cosine-distributed
+/// direction (either side of two-sided lights), then up to B diffuse hits, each leaving a
+/// VirtualPointLight and continuing in a cosine-distributed direction. A path's power is
+/// Le x (total light area) x pi / N (x 2 for two-sided lights), times the albedo of every
+/// surface it left; so that the lights together carry the lights' flux into each bounce.
+/// Light paths pass through lights (lights do not reflect). Path i uses its own random
+/// stream (seed, i): the lights do not depend on the number of threads.
+std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, const RenderWorld& world, const VplOptions& options);
+
+/// The geometric term cos_x cos_v / d^2 of a connection from x (unit normal n) to `light`,
+/// and whether the connection faces both surfaces. G is at most `max_geometric` when it is
+/// clamped (the energy above it is dropped).
+struct VplGeometry {
+  bool faces = false;
+  double geometric = 0;  ///< unclamped
+};
+VplGeometry vpl_geometry(const Vertex& x, const Vertex& n, const VirtualPointLight& light);
+
+}  // namespace visproxy

@@ -1,0 +1,177 @@
+// Stochastic visibility with the proxy as a control variate: V' + (V - V') [u < q] / q, with
+// q chosen by the proxy's answer (equal, adaptive from probe rays, or learned per pixel).
+
+#include <vector>
+
+#include "render/visibility/occluder_disks.h"
+#include "render/visibility/visibility.h"
+
+namespace visproxy {
+
+ControlVariateSample control_variate_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
+                                                bool own_cannot_block) {
+  ControlVariateSample sample;
+  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (!rest) return sample;
+  ++stats.proxy_tests;
+  sample.proxy_traced = true;
+  sample.proxy_blocked = world.proxy_blocks(from, to, *rest);
+  const double proxy = sample.proxy_blocked ? 0.0 : 1.0;
+  sample.trace_probability = sample.proxy_blocked ? q.after_hit : q.after_miss;
+  sample.visibility = proxy;
+  if (!(u < sample.trace_probability)) return sample;
+  ++(sample.proxy_blocked ? stats.corrections_after_hit : stats.corrections_after_miss);
+  ++stats.exact_tests;
+  sample.mesh_traced = true;
+  sample.mesh_blocked = world.mesh_blocks(from, to, *rest);
+  sample.visibility = proxy + ((sample.mesh_blocked ? 0.0 : 1.0) - proxy) / sample.trace_probability;
+  return sample;
+}
+
+namespace {
+
+class ControlVariateVisibility;
+
+class ControlVariatePoint final : public PointVisibility {
+ public:
+  explicit ControlVariatePoint(ControlVariateVisibility& shared) : shared_(shared) {}
+  void begin(const ShadingPoint& point) override;
+  double to_light(const Vertex& end) override {
+    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, corrections_);
+  }
+  double connection(const Vertex& end) override {
+    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, connection_corrections_);
+  }
+
+ private:
+  double answer(const Vertex& end, const CorrectionProbabilities& q);
+  // With occluder disks as V': the exactly traced part first, then the disks, corrected by
+  // the meshes of the instances the disks stand for.
+  double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
+  void learn(bool proxy_blocked, bool mesh_blocked);
+  bool disks_in_use_ = false;
+  OccluderDisks disks_;
+  InstanceFilter exact_part_, disk_part_;
+  bool any_exact_ = false;
+  ControlVariateVisibility& shared_;
+  ShadingPoint point_;
+  ProxyKind kind_ = ProxyKind::general;
+  CorrectionProbabilities corrections_, connection_corrections_;
+};
+
+class ControlVariateVisibility final : public Visibility {
+ public:
+  explicit ControlVariateVisibility(const VisibilityContext& context)
+      : context_(context),
+        options_{.scale = context.options.correction_scale, .floor = context.options.probability_floor},
+        pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0),
+        pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0) {
+    for (std::size_t i = 0; i < context.scene.instances.size(); ++i) {
+      kinds_.push_back(context.world.stochastic_kind(context.options.split ? static_cast<int>(i) : -1));
+      disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
+    }
+  }
+  std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<ControlVariatePoint>(*this); }
+
+ private:
+  friend class ControlVariatePoint;
+  VisibilityContext context_;
+  CorrectionOptions options_;
+  std::vector<ProxyKind> kinds_;
+  std::vector<RayTypeCounts> pixel_probes_;        // adaptive with probe_passes > 0
+  std::vector<CorrectionEvidence> pixel_evidence_;  // learned: what each pixel's corrections showed so far
+  bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
+};
+
+void ControlVariatePoint::begin(const ShadingPoint& point) {
+  point_ = point;
+  const RenderOptions& options = shared_.context_.options;
+  kind_ = shared_.kinds_[static_cast<std::size_t>(point.hit->instance)];
+  corrections_ = equal_correction_probabilities(kind_);
+  // Segments that do not end on a light: the general form (see TermChoicePoint::begin).
+  connection_corrections_ = equal_correction_probabilities(ProxyKind::general);
+  if (options.probabilities == ProbabilityMode::adaptive) {
+    const CorrectionEvidence evidence = CorrectionEvidence::from(
+        adaptive_probe_counts(shared_.context_, point, shared_.pixel_probes_.empty() ? nullptr : &shared_.pixel_probes_[point.pixel]));
+    corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
+    connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
+  }
+  if (options.probabilities == ProbabilityMode::learned) {
+    corrections_ = correction_probabilities(kind_, shared_.pixel_evidence_[point.pixel], shared_.options_);
+    connection_corrections_ = correction_probabilities(ProxyKind::general, shared_.pixel_evidence_[point.pixel], shared_.options_);
+  }
+  disks_in_use_ = shared_.disks_;
+  if (!disks_in_use_) return;
+  // Traced exactly: the own instance when splitting (unless it lies behind the tangent
+  // plane), and every instance without a sphere set. The disks stand for the others.
+  const RenderWorld& world = shared_.context_.world;
+  const int own = point.hit->instance;
+  disks_.reset(point.position, point.hit->normal);
+  unsigned exact_bits = 0, disk_bits = 0;
+  for (std::size_t i = 0; i < shared_.context_.scene.instances.size(); ++i) {
+    const bool is_own = static_cast<int>(i) == own;
+    const std::vector<Sphere>& balls = world.occluder_spheres(i);
+    if (balls.empty() || (is_own && options.split)) {
+      if (!(is_own && point.hit->own_mesh_behind)) exact_bits |= instance_bit(i);
+      continue;
+    }
+    disks_.add(balls, is_own && options.self_shadow == SelfShadow::heuristic);
+    disk_bits |= instance_bit(i);
+  }
+  disks_.finish();
+  exact_part_ = {.skip = -1, .only = -1, .bits = exact_bits};
+  disk_part_ = {.skip = -1, .only = -1, .bits = disk_bits};
+  any_exact_ = exact_bits != 0;
+}
+
+void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
+  if (shared_.pixel_evidence_.empty()) return;
+  CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
+  evidence.add(proxy_blocked, mesh_blocked);
+  corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
+  connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
+}
+
+double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProbabilities& q) {
+  const RenderWorld& world = shared_.context_.world;
+  RenderStats& stats = *point_.stats;
+  const double u = point_.choices->uniform();
+  if (any_exact_) {
+    ++stats.exact_tests;
+    if (world.mesh_blocks(point_.position, end, exact_part_)) return 0;
+  }
+  ++stats.proxy_tests;
+  const bool proxy_blocked = disks_.occludes(end, stats.disk_tests);
+  const double proxy = proxy_blocked ? 0.0 : 1.0;
+  const double trace_probability = proxy_blocked ? q.after_hit : q.after_miss;
+  *point_.p1_sum += 1 - trace_probability;
+  *point_.p1_count += 1;
+  if (!(u < trace_probability)) return proxy;
+  ++(proxy_blocked ? stats.corrections_after_hit : stats.corrections_after_miss);
+  ++stats.exact_tests;
+  const bool mesh_blocked = world.mesh_blocks(point_.position, end, disk_part_);
+  learn(proxy_blocked, mesh_blocked);
+  return proxy + ((mesh_blocked ? 0.0 : 1.0) - proxy) / trace_probability;
+}
+
+double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilities& q) {
+  const RenderOptions& options = shared_.context_.options;
+  const ControlVariateSample sample = control_variate_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, q,
+                                                                 point_.choices->uniform(), options.split, *point_.stats,
+                                                                 point_.hit->own_mesh_behind);
+  if (sample.proxy_traced) {
+    *point_.p1_sum += 1 - sample.trace_probability;
+    *point_.p1_count += 1;
+  }
+  if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);
+  return sample.visibility;
+}
+
+}  // namespace
+
+std::unique_ptr<Visibility> make_control_variate_visibility(const VisibilityContext& context) {
+  return std::make_unique<ControlVariateVisibility>(context);
+}
+
+}  // namespace visproxy

@@ -1,0 +1,49 @@
+#include "render/visibility/visibility.h"
+
+namespace visproxy {
+
+std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                 bool split, RenderStats& stats, bool own_cannot_block) {
+  InstanceFilter rest;
+  if (!split) return rest;
+  if (!own_cannot_block) {
+    ++stats.exact_tests;
+    if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return std::nullopt;
+  }
+  rest.skip = own_instance;
+  return rest;
+}
+
+RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts) {
+  const RenderOptions& options = context.options;
+  RayTypeCounts local;
+  RayTypeCounts& counts = pixel_counts ? *pixel_counts : local;
+  if (options.probe_passes == 0 || point.pass < options.probe_passes) {
+    const int own = point.hit->instance;
+    const InstanceFilter rest{.skip = options.split ? own : -1, .only = -1};
+    const Vertex& x = point.position;
+    for (int k = 0; k < options.probe_rays; ++k) {
+      const LightSample y = context.lights.sample(*point.choices);
+      if (point.hit->normal.dot(y.position - x) <= 0) continue;  // below the surface: never traced
+      ++point.stats->probe_rays;
+      const Vertex end = light_end(context.world, y, x);
+      counts.add(context.world.mesh_blocks(x, end, rest), context.world.proxy_blocks(x, end, rest));
+    }
+  }
+  return counts;
+}
+
+std::unique_ptr<Visibility> make_visibility(const VisibilityContext& context) {
+  const RenderOptions& options = context.options;
+  switch (options.visibility) {
+    case VisibilityMode::exact: return make_exact_visibility(context);
+    case VisibilityMode::bounds: return make_bounds_visibility(context);
+    case VisibilityMode::spheres: return make_occluder_disk_visibility(context);
+    case VisibilityMode::stochastic:
+      return options.estimator == StochasticEstimator::control_variate ? make_control_variate_visibility(context)
+                                                                       : make_term_choice_visibility(context);
+  }
+  return make_exact_visibility(context);
+}
+
+}  // namespace visproxy

@@ -1,0 +1,91 @@
+#pragma once
+// Visibility strategies: how the renderer answers a shadow segment: traced exactly,
+// estimated with a proxy (eq. 8 or the control variate), proved by bounds, or approximated
+// by occluder disks. A strategy answers the segments of one shading point at a time, one
+// by one or as a group that shares the point as origin; integrators choose the segments.
+
+#include <cstddef>
+#include <memory>
+#include <span>
+
+#include "render/render_world.h"
+#include "render/renderer.h"
+#include "render/sampling.h"
+
+namespace visproxy {
+
+/// A shading point as a visibility strategy sees it.
+struct ShadingPoint {
+  std::size_t pixel = 0;
+  int pass = 0;
+  const SurfaceHit* hit = nullptr;  ///< where the camera ray met the surface
+  Vertex position;                  ///< the point the segments leave from: hit->position moved off the surface
+  PixelRandom* choices = nullptr;   ///< the estimators' stream (terms, corrections, probes)
+  RenderStats* stats = nullptr;
+  /// stochastic: the pixel's running sum of the probability that a segment traces the
+  /// proxy alone, and how many values it holds (RenderResult::p1_map)
+  double* p1_sum = nullptr;
+  double* p1_count = nullptr;
+};
+
+/// The answers of one thread, for the shading point begin() was last given. Values are
+/// estimates of visibility (1 unoccluded, 0 occluded); stochastic strategies may return any
+/// real number whose mean is the visibility.
+class PointVisibility {
+ public:
+  virtual ~PointVisibility() = default;
+  virtual void begin(const ShadingPoint& point) = 0;
+  /// The segment from the point to `end`, a light sample moved off the light (light_end).
+  virtual double to_light(const Vertex& end) = 0;
+  /// A segment to a point that is not on a light (a virtual point light, moved off its
+  /// surface by segment_end). Proofs that need one end on a light are not used for it.
+  virtual double connection(const Vertex& end) = 0;
+  /// connection() for a group of ends; out[i] answers ends[i]. Strategies that trace the
+  /// group as packets of rays from the shared origin override it.
+  virtual void connections(std::span<const Vertex> ends, std::span<double> out) {
+    for (std::size_t i = 0; i < ends.size(); ++i) out[i] = connection(ends[i]);
+  }
+  /// After the point's last segment.
+  virtual void end() {}
+};
+
+/// One per render: holds what persists across a pixel's passes and makes each thread's
+/// PointVisibility.
+class Visibility {
+ public:
+  virtual ~Visibility() = default;
+  virtual std::unique_ptr<PointVisibility> point_visibility() = 0;
+};
+
+struct VisibilityContext {
+  const Scene& scene;
+  const RenderWorld& world;
+  const RenderOptions& options;
+  const LightSampler& lights;
+  std::size_t pixels = 0;
+};
+
+std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_term_choice_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_control_variate_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_bounds_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_occluder_disk_visibility(const VisibilityContext& context);
+/// The strategy `context.options` asks for.
+std::unique_ptr<Visibility> make_visibility(const VisibilityContext& context);
+
+/// With splitting, the own instance first (exactly); returns the filter for the rest of
+/// the scene, or nullopt when the own instance blocks the segment.
+std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                 bool split, RenderStats& stats, bool own_cannot_block);
+
+}  // namespace visproxy
+
+namespace visproxy {
+
+/// adaptive probabilities: the ray types seen by K probe segments from the point to the
+/// lights (rest of the scene: the own instance left out when splitting). With
+/// probe_passes > 0 the counts of the pixel's first passes are kept in `pixel_counts` and
+/// returned in later passes without probing.
+RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts);
+
+}  // namespace visproxy
