@@ -12,12 +12,12 @@ std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, co
   for (int i = 0; i < options.paths; ++i) {
     PixelRandom random(options.seed ^ kLightPathStream, static_cast<std::uint64_t>(i), 0);
     const LightSample y = sampler.sample(random);
-    // Lights emit towards -normal (two-sided ones to both sides).
-    Vertex emit = -y.normal;
+    // Lights emit to the side their winding's normal points to (two-sided ones to both).
+    Vertex emit = y.normal;
     double sides = 1;
     if (y.two_sided) {
       sides = 2;
-      if (random.uniform() < 0.5) emit = y.normal;
+      if (random.uniform() < 0.5) emit = -y.normal;
     }
     Color power = y.radiance * (sampler.total_area() * std::numbers::pi * sides / options.paths);
     const double u1 = random.uniform(), u2 = random.uniform();

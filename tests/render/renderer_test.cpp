@@ -158,6 +158,12 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
                    .probe_passes = 2, .spp = 3, .shadow_rays = 2, .seed = 11});
   modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
                    .estimator = StochasticEstimator::control_variate, .spp = 3, .shadow_rays = 2, .seed = 11});
+  // Virtual point lights: exact (ray packets), occluder disks, and the control variate with
+  // disks as V' and learned probabilities (the squashed ball's proxy is a sphere set).
+  for (const VisibilityMode visibility : {VisibilityMode::exact, VisibilityMode::spheres, VisibilityMode::stochastic})
+    modes.push_back({.integrator = IntegratorKind::vpl, .visibility = visibility, .probabilities = ProbabilityMode::learned,
+                     .estimator = StochasticEstimator::control_variate, .spp = 2, .shadow_rays = 1, .seed = 11, .vpls = 48,
+                     .bounces = 2});
   for (const RenderOptions& options : modes) {
     const RenderResult many = render(s.scene, world, options);
     RenderResult one;
@@ -165,7 +171,7 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
       const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
       one = render(s.scene, world, options);
     }
-    EXPECT_EQ(many.image.pixels, one.image.pixels) << visibility_mode_name(options.visibility) << " "
+    EXPECT_EQ(many.image.pixels, one.image.pixels) << integrator_name(options.integrator) << " " << visibility_mode_name(options.visibility) << " "
                                                     << probability_mode_name(options.probabilities);
     EXPECT_EQ(many.stats.to_json(), [&] {
       nlohmann::json j = one.stats.to_json();
