@@ -28,6 +28,7 @@ struct RenderCommandOptions {
   double vpl_clamp = 0.05;
   SelfShadow self_shadow = SelfShadow::heuristic;
   bool single_rays = false;
+  std::size_t disk_grid_from = 256;
   ProbabilityMode probabilities = ProbabilityMode::equal;
   StochasticEstimator estimator = StochasticEstimator::term_choice;
   int probe_passes = 0;
@@ -96,6 +97,9 @@ void add_render_command(CLI::App& app, int& exit_code) {
                    "spheres: heuristic skips the own instance's spheres closer than twice their radius (t < 2R); exact traces "
                    "the own instance's mesh instead of its spheres; none uses all its spheres [default: heuristic]")
       ->transform(CLI::CheckedTransformer(self_shadows, CLI::ignore_case));
+  command->add_option("--disk-grid-from", o->disk_grid_from,
+                      "Occluder disks: sort a shading point's disks into a grid over the directions when it has at least this "
+                      "many (0: always) [default: 256]");
   command->add_flag("--single-rays", o->single_rays, "vpl: trace the connections of a shading point one ray at a time, not as packets");
   const std::map<std::string, ProbabilityMode> probability_modes{
       {"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}};
@@ -192,6 +196,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
                           .virtual_point_lights = nullptr,
                           .group_connections = !o->single_rays,
                           .self_shadow = o->self_shadow,
+                          .disk_grid_from = o->disk_grid_from,
                           .seconds = o->seconds,
                           .on_pass = nullptr};
     if (terminal)

@@ -170,6 +170,20 @@ struct RenderWorld::Impl {
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
   std::vector<std::string> notes;
   std::vector<std::vector<Sphere>> occluder_spheres;  // per instance, world space
+  // Instances whose mesh lies on its convex hull's boundary: the hull's planes (outward
+  // normal, offset) in world space, and the margin a point must keep inside them.
+  struct ConvexShell {
+    unsigned bit = 0;
+    std::vector<std::pair<Vertex, double>> planes;
+    double margin = 0;
+    bool holds(const Vertex& p) const {
+      for (const auto& [normal, offset] : planes)
+        if (!(normal.dot(p) - offset < -margin)) return false;
+      return true;
+    }
+  };
+  std::vector<ConvexShell> shells;
+  static std::optional<ConvexShell> convex_shell(const TriangleMesh& mesh, const Eigen::Affine3d& transform);
   int packet = 1;  // width of the packets grouped queries use
 
   ~Impl() {
@@ -291,7 +305,8 @@ struct RenderWorld::Impl {
   // lane is one segment ray with the same mask and filter).
   template <typename RayN, int N>
   void blocked_packets(RTCScene scene, const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> out,
-                       const InstanceFilter& filter, void (*occluded)(const int*, RTCScene, RTCIntersectContext*, RayN*)) const {
+                       const InstanceFilter& filter, std::span<const unsigned> lane_bits,
+                       void (*occluded)(const int*, RTCScene, RTCIntersectContext*, RayN*)) const {
     FilterContext context;
     rtcInitIntersectContext(&context.context);
     context.filter = filter;
@@ -315,7 +330,8 @@ struct RenderWorld::Impl {
         rays.dir_y[lane] = static_cast<float>(direction.y());
         rays.dir_z[lane] = static_cast<float>(direction.z());
         rays.tnear[lane] = 0.0f, rays.tfar[lane] = 1.0f, rays.time[lane] = 0.0f;
-        rays.mask[lane] = mask, rays.id[lane] = 0, rays.flags[lane] = 0;
+        rays.mask[lane] = lane_bits.empty() ? mask : mask & lane_bits[i];
+        rays.id[lane] = 0, rays.flags[lane] = 0;
       }
       if (!any) continue;
       occluded(valid, scene, &context.context, &rays);
@@ -325,25 +341,31 @@ struct RenderWorld::Impl {
   }
 
   void blocked_group(RTCScene scene, const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> out,
-                     const InstanceFilter& filter) const {
+                     const InstanceFilter& filter, std::span<const unsigned> lane_bits) const {
     std::fill(out.begin(), out.end(), std::uint8_t{0});
-    if (counting || packet == 1) {
-      for (std::size_t i = 0; i < ends.size(); ++i) out[i] = blocked(scene, from, ends[i], filter) ? 1 : 0;
+    auto lane_filter = [&](std::size_t i) {
+      InstanceFilter f = filter;
+      if (!lane_bits.empty()) f.bits &= lane_bits[i];
+      return f;
+    };
+    // Without ray masks the filter function would need a filter per lane: single rays.
+    if (counting || packet == 1 || (!lane_bits.empty() && !masks)) {
+      for (std::size_t i = 0; i < ends.size(); ++i) out[i] = blocked(scene, from, ends[i], lane_filter(i)) ? 1 : 0;
       return;
     }
     if (const auto it = convex.find(scene); it != convex.end())
       for (std::size_t i = 0; i < ends.size(); ++i)
         for (const ConvexInstance& instance : it->second)
-          if (filter_passes(instance.id, filter) && instance.world.meets_segment(from, ends[i])) {
+          if (filter_passes(instance.id, lane_filter(i)) && instance.world.meets_segment(from, ends[i])) {
             out[i] = 1;
             break;
           }
     const auto masks_here = embree_masks.find(scene);
     if (masks_here == embree_masks.end() || (masks_here->second & query_mask(filter)) == 0) return;
     if (packet == 8)
-      blocked_packets<RTCRay8, 8>(scene, from, ends, out, filter, &rtcOccluded8);
+      blocked_packets<RTCRay8, 8>(scene, from, ends, out, filter, lane_bits, &rtcOccluded8);
     else
-      blocked_packets<RTCRay4, 4>(scene, from, ends, out, filter, &rtcOccluded4);
+      blocked_packets<RTCRay4, 4>(scene, from, ends, out, filter, lane_bits, &rtcOccluded4);
   }
 
   // Whether every light lies outside the solid of `solid` (a closed mesh, placed in the
@@ -422,6 +444,43 @@ PreparedProxy prepare_proxy(const InstanceProxy& p, const SceneMesh& mesh, doubl
 }
 
 }  // namespace
+
+// The convex shell of a small mesh (at most 4096 triangles, none degenerate) whose every
+// triangle lies in a supporting plane of its vertices, placed by `transform`; nullopt
+// otherwise. Coplanar triangles share a plane. The tolerance for "in the plane" is 2^-40
+// of the mesh's magnitude; points must keep 2^-36 of it inside every plane.
+std::optional<RenderWorld::Impl::ConvexShell> RenderWorld::Impl::convex_shell(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
+  if (mesh.triangles.empty() || mesh.triangles.size() > 4096) return std::nullopt;
+  std::vector<Vertex> points;
+  for (const Vertex& p : used_positions(mesh)) points.push_back(transform * p);
+  double magnitude = 0;
+  for (const Vertex& p : points) magnitude = std::max(magnitude, p.cwiseAbs().maxCoeff());
+  const double tolerance = 0x1.0p-40 * magnitude;
+  ConvexShell shell;
+  shell.margin = 0x1.0p-36 * magnitude;
+  for (const Triangle& t : mesh.triangles) {
+    const Vertex a = transform * mesh.positions[t[0]], b = transform * mesh.positions[t[1]], c = transform * mesh.positions[t[2]];
+    Vertex normal = (b - a).cross(c - a);
+    const double length = normal.norm();
+    if (!(length > 0x1.0p-30 * magnitude * magnitude)) return std::nullopt;  // degenerate: no plane to lie in
+    normal /= length;
+    double offset = normal.dot(a);
+    // Outward: the other vertices behind the plane, or (the other side) in front of it.
+    double lowest = 0, highest = 0;
+    for (const Vertex& p : points) {
+      const double side = normal.dot(p) - offset;
+      lowest = std::min(lowest, side), highest = std::max(highest, side);
+    }
+    if (highest > tolerance && lowest < -tolerance) return std::nullopt;  // vertices on both sides: not a supporting plane
+    if (highest > tolerance) normal = -normal, offset = -offset;
+    for (const Vertex& p : {a, b, c})
+      if (std::abs(normal.dot(p) - offset) > tolerance) return std::nullopt;
+    bool known = false;
+    for (const auto& [n, d] : shell.planes) known = known || ((n - normal).norm() < 1e-12 && std::abs(d - offset) <= tolerance);
+    if (!known) shell.planes.emplace_back(normal, offset);
+  }
+  return shell;
+}
 
 RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& proxies, const RenderWorldOptions& options)
     : impl_(std::make_unique<Impl>()) {
@@ -612,6 +671,11 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     sphere.radius += pad_world;
     w.instance_bounds.push_back(world);
     w.instance_spheres.push_back(sphere);
+    if (scene.instances.size() <= 31)
+      if (std::optional<Impl::ConvexShell> shell = Impl::convex_shell(mesh.mesh, instance.transform)) {
+        shell->bit = instance_mask(i);
+        w.shells.push_back(std::move(*shell));
+      }
   }
 
   // Lights: visible to camera rays only (mask, or the filter function), one geometry after the instances.
@@ -673,9 +737,17 @@ bool RenderWorld::mesh_blocks(const Vertex& from, const Vertex& to, InstanceFilt
   return impl_->blocked(impl_->camera, from, to, filter);
 }
 void RenderWorld::mesh_blocks(const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> blocked,
-                              InstanceFilter filter) const {
-  if (blocked.size() != ends.size()) throw Error("RenderWorld::mesh_blocks: one answer per segment end is needed");
-  impl_->blocked_group(impl_->camera, from, ends, blocked, filter);
+                              InstanceFilter filter, std::span<const unsigned> lane_bits) const {
+  if (blocked.size() != ends.size() || (!lane_bits.empty() && lane_bits.size() != ends.size()))
+    throw Error("RenderWorld::mesh_blocks: one answer (and lane filter) per segment end is needed");
+  impl_->blocked_group(impl_->camera, from, ends, blocked, filter, lane_bits);
+}
+
+unsigned RenderWorld::convex_shells_holding(const Vertex& point) const {
+  unsigned bits = 0;
+  for (const Impl::ConvexShell& shell : impl_->shells)
+    if (shell.holds(point)) bits |= shell.bit;
+  return bits;
 }
 int RenderWorld::packet_width() const { return impl_->counting ? 1 : impl_->packet; }
 const std::vector<Sphere>& RenderWorld::occluder_spheres(std::size_t instance) const { return impl_->occluder_spheres[instance]; }

@@ -120,7 +120,9 @@ class RenderWorld {
   /// mesh_blocks for a group of segments from one origin: blocked[i] for from to ends[i]
   /// (blocked.size() == ends.size()). Traced as packets of 8 (or 4) rays where Embree has
   /// them natively; the answers equal those of single queries.
-  void mesh_blocks(const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> blocked, InstanceFilter filter = {}) const;
+  /// `lane_bits`, if given, narrows the instances each segment sees (lane_bits[i] & filter.bits).
+  void mesh_blocks(const Vertex& from, std::span<const Vertex> ends, std::span<std::uint8_t> blocked, InstanceFilter filter = {},
+                   std::span<const unsigned> lane_bits = {}) const;
   /// The packet width mesh_blocks of a group uses (1: single rays).
   int packet_width() const;
   /// The same against each instance's stochastic proxy (its mesh where it has none). The
@@ -140,6 +142,14 @@ class RenderWorld {
   /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
+
+  /// The instances (as instance_bit()s) whose mesh lies on the boundary of its own convex
+  /// hull (every triangle in a supporting plane of the mesh's vertices: a box room, a wall,
+  /// a floor) and whose hull holds `point` strictly, by a margin of double rounding. A
+  /// segment between two points both held by an instance's hull cannot meet its mesh: for
+  /// such pairs the instance need not be traced. Empty (0) beyond 31 instances, where bits
+  /// are shared. Checked in double: the answer is exact, not Embree's float one.
+  unsigned convex_shells_holding(const Vertex& point) const;
 
   /// World-space balls of the instance's stochastic proxy when it is a sphere set (each
   /// radius scaled by the transform's largest stretch, so it holds its transformed ball),

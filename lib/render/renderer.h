@@ -69,6 +69,10 @@ struct RenderOptions {
   /// (Embree ray packets) where the strategy can; false: one ray at a time.
   bool group_connections = true;
   SelfShadow self_shadow = SelfShadow::heuristic;  ///< spheres visibility
+  /// Occluder disks (spheres visibility, and the control variate's V' with VPLs): sort a
+  /// shading point's disks into a grid over the directions (OccluderDisks::finish) when it
+  /// has at least this many; fewer are compared one block after another.
+  std::size_t disk_grid_from = 256;
   double seconds = 0;              ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;

@@ -45,13 +45,12 @@ std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, co
 }
 
 VplGeometry vpl_geometry(const Vertex& x, const Vertex& n, const VirtualPointLight& light) {
+  // cos_x cos_v / d^2 = (n . w) (-n_v . w) / d^4: no square root.
   const Vertex w = light.position - x;
+  const double along_x = n.dot(w), along_v = -light.normal.dot(w);
+  if (!(along_x > 0 && along_v > 0)) return {};
   const double d2 = w.squaredNorm();
-  if (!(d2 > 0)) return {};
-  const double d = std::sqrt(d2);
-  const double cos_x = n.dot(w) / d, cos_v = -light.normal.dot(w) / d;
-  if (cos_x <= 0 || cos_v <= 0) return {};
-  return {true, cos_x * cos_v / d2};
+  return {true, along_x * along_v / (d2 * d2)};
 }
 
 }  // namespace visproxy

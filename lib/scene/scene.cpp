@@ -11,8 +11,12 @@
 #include "core/files.h"
 #include "core/json_input.h"
 #include "mesh/read_mesh.h"
+#include "mesh/subdivide.h"
 
 namespace visproxy {
+
+// More than this many triangles after "subdivide" is refused (about 3 GB of mesh and BVH).
+constexpr double kMaxSubdividedTriangles = 64e6;
 namespace {
 
 using nlohmann::json;
@@ -58,6 +62,14 @@ class Parser : public JsonInput {
       if (mesh.mesh.triangles.empty()) throw InvalidInputError(mesh.file, "has no triangles");
     } else {
       mesh.mesh = inline_mesh(value, where);
+    }
+    if (const json* levels = optional_member(value, "subdivide", where)) {
+      const std::string levels_path = json_member_path(where, "subdivide");
+      const auto n = static_cast<int>(integer(*levels, levels_path, 0, 4));
+      if (static_cast<double>(mesh.mesh.triangles.size()) * std::pow(4.0, n) > kMaxSubdividedTriangles)
+        fail(levels_path, "would make " + std::to_string(mesh.mesh.triangles.size()) + " x 4^" + std::to_string(n) +
+                              " triangles, more than " + std::to_string(static_cast<long long>(kMaxSubdividedTriangles)));
+      mesh.mesh = subdivide_midpoint(mesh.mesh, n);
     }
     return mesh;
   }

@@ -25,7 +25,8 @@ Vertex random_unit(Random& random) {
 // 64 segment ends in front of the tangent plane, some inside balls' cones and beyond them.
 // The float test must give the double definition's answer except where the configuration
 // lies within float rounding of a boundary (|cos delta - cos gamma| or |t - z| / z below
-// 1e-5): no disagreement elsewhere, and those near-boundary cases are rare.
+// 1e-5): no disagreement elsewhere, and those near-boundary cases are rare. The grid over
+// the projected hemisphere gives the linear loop's answer every time.
 TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
   Random random(2024);
   std::uint64_t checks = 0, occluded = 0, near_boundary = 0, tests = 0;
@@ -36,10 +37,15 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
     std::vector<Sphere> balls;
     const int count = 1 + static_cast<int>(random.below(24));
     for (int b = 0; b < count; ++b) balls.push_back({x + 3 * random.uniform() * random_unit(random), 0.01 + 0.19 * random.uniform()});
-    OccluderDisks disks;
+    OccluderDisks disks, grid;
     disks.reset(x, n);
     disks.add(balls, false);
     disks.finish();
+    grid.reset(x, n);
+    grid.add(balls, false);
+    grid.finish(true);
+    std::vector<Vertex> ends;
+    std::vector<std::uint8_t> answers;
     for (int e = 0; e < 64; ++e) {
       Vertex direction = random_unit(random);
       if (direction.dot(n) < 0) direction -= 2 * direction.dot(n) * n;
@@ -64,6 +70,7 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
         close = close || std::abs(t - z) < 1e-5 * z || std::abs(t - s.radius) < 1e-5 * t;
       }
       const bool answer = disks.occludes(end, tests);
+      ends.push_back(end), answers.push_back(answer ? 1 : 0);
       ++checks;
       occluded += answer ? 1 : 0;
       if (answer != reference) {
@@ -73,6 +80,14 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
       ball_hits += ball ? 1 : 0;
       disk_vs_ball += answer != ball ? 1 : 0;
     }
+    // The group forms, with and without the grid, give the single segments' answers: the
+    // grid only narrows the disks compared.
+    std::vector<std::uint8_t> linear_group(ends.size()), grid_group(ends.size());
+    std::uint64_t group_tests = 0;
+    disks.occludes(ends, linear_group, group_tests);
+    grid.occludes(ends, grid_group, group_tests);
+    EXPECT_EQ(linear_group, answers) << "point " << p;
+    EXPECT_EQ(grid_group, answers) << "point " << p;
   }
   EXPECT_GT(occluded, checks / 5);
   EXPECT_LT(occluded, checks * 4 / 5);
@@ -89,6 +104,41 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
   EXPECT_GT(disk_vs_ball, 0u);
 }
 
+// The grid against the linear loop where its projection is stretched: balls up to 1.5
+// units wide within 2 units (caps near a hemisphere wide, caps holding -n, balls holding x
+// or straddling the tangent plane), and ends grazing the plane.
+TEST(OccluderDisks, GridAgreesWithTheLinearLoopForWideAndGrazingCaps) {
+  Random random(31337);
+  std::uint64_t tests = 0, occluded = 0, checks = 0;
+  for (int p = 0; p < 3000; ++p) {
+    const Vertex x = Vertex::Zero(), n = random_unit(random);
+    std::vector<Sphere> balls;
+    const int count = 1 + static_cast<int>(random.below(40));
+    for (int b = 0; b < count; ++b) balls.push_back({2 * random.uniform() * random_unit(random), 0.01 + 1.5 * random.uniform() * random.uniform()});
+    OccluderDisks linear, grid;
+    linear.reset(x, n), grid.reset(x, n);
+    linear.add(balls, false), grid.add(balls, false);
+    linear.finish(), grid.finish(true);
+    std::vector<Vertex> ends;
+    std::vector<std::uint8_t> answers;
+    for (int e = 0; e < 64; ++e) {
+      Vertex direction = random_unit(random);
+      if (direction.dot(n) < 0) direction -= 2 * direction.dot(n) * n;
+      if (e % 4 == 0) direction = (direction - 0.999 * direction.dot(n) * n).normalized();  // grazing
+      if (e % 16 == 1) direction = -n;  // behind the plane: outside the projection's reach
+      ends.push_back((0.1 + 5 * random.uniform()) * direction);
+      answers.push_back(linear.occludes(ends.back(), tests) ? 1 : 0);
+      occluded += answers.back();
+      ++checks;
+    }
+    std::vector<std::uint8_t> grouped(ends.size());
+    grid.occludes(ends, grouped, tests);
+    ASSERT_EQ(grouped, answers) << "point " << p;
+  }
+  EXPECT_GT(occluded, checks / 10);
+  EXPECT_LT(occluded, checks * 9 / 10);
+}
+
 // The two loops compute the same comparisons; they may differ only by the rounding of the
 // dot product (contracted to fused multiply-adds in the vectorised clone), never beyond it.
 TEST(OccluderDisks, VectorisedAndScalarLoopsAgree) {
@@ -103,10 +153,10 @@ TEST(OccluderDisks, VectorisedAndScalarLoopsAgree) {
       c[j] = static_cast<float>(0.9 + 0.1 * random.uniform());
       t[j] = static_cast<float>(3 * random.uniform());
     }
-    const Vertex d = random_unit(random);
     const float z = static_cast<float>(3 * random.uniform());
-    const bool a = any_disk_occludes(ux.data(), uy.data(), uz.data(), c.data(), t.data(), n, float(d.x()), float(d.y()), float(d.z()), z);
-    const bool b = any_disk_occludes_scalar(ux.data(), uy.data(), uz.data(), c.data(), t.data(), n, float(d.x()), float(d.y()), float(d.z()), z);
+    const Vertex w = random_unit(random) * z;
+    const bool a = any_disk_occludes(ux.data(), uy.data(), uz.data(), c.data(), t.data(), n, float(w.x()), float(w.y()), float(w.z()), z);
+    const bool b = any_disk_occludes_scalar(ux.data(), uy.data(), uz.data(), c.data(), t.data(), n, float(w.x()), float(w.y()), float(w.z()), z);
     differ += a != b ? 1 : 0;
     hidden += a ? 1 : 0;
     ++total;

@@ -25,6 +25,12 @@ class VplIntegrator final : public Integrator {
       lights_ = trace_virtual_point_lights(context.scene, context.world,
                                            {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
     }
+    // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its end,
+    // moved off the surface towards that side, is the same for every shading point.
+    for (const VirtualPointLight& light : lights_) {
+      ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal));
+      end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
+    }
     BoundingBox box;
     for (std::size_t i = 0; i < context.scene.instances.size(); ++i) {
       const BoundingBox& b = context.world.instance_bounds(i);
@@ -45,20 +51,22 @@ class VplIntegrator final : public Integrator {
     Color radiance = Color::Zero();
     if (!context_.lights.empty()) radiance = direct_light(context_, point, random, visibility) / context_.options.shadow_rays;
     thread_local std::vector<Vertex> ends;
+    thread_local std::vector<unsigned> shells;
     thread_local std::vector<std::size_t> which;
     thread_local std::vector<double> geometric, answers;
-    ends.clear(), which.clear(), geometric.clear();
+    ends.clear(), shells.clear(), which.clear(), geometric.clear();
     const Vertex& x = point.position;
     for (std::size_t i = 0; i < lights_.size(); ++i) {
       const VplGeometry g = vpl_geometry(x, point.hit->normal, lights_[i]);
       if (!g.faces) continue;
       which.push_back(i);
       geometric.push_back(g.geometric);
-      ends.push_back(segment_end(context_.world, lights_[i].position, lights_[i].normal, x));
+      ends.push_back(ends_[i]);
+      shells.push_back(end_shells_[i]);
     }
     point.stats->vpl_connections += ends.size();
     answers.resize(ends.size());
-    visibility.connections(ends, answers);
+    visibility.connections(ends, shells, answers);
     double energy = 0, dropped = 0;
     for (std::size_t k = 0; k < which.size(); ++k) {
       if (answers[k] == 0) continue;
@@ -99,6 +107,8 @@ class VplIntegrator final : public Integrator {
  private:
   IntegratorContext context_;
   std::vector<VirtualPointLight> lights_;
+  std::vector<Vertex> ends_;         // per VPL: the end of its connections
+  std::vector<unsigned> end_shells_;  // per VPL: RenderWorld::convex_shells_holding(its end)
   bool given_ = false;
   double diagonal_ = 0, clamp_distance_ = 0, max_geometric_ = 0;
   // Per pixel, what the VPLs gave before clamping and what clamping dropped (luminance of

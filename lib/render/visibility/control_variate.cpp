@@ -54,6 +54,7 @@ class ControlVariatePoint final : public PointVisibility {
   OccluderDisks disks_;
   InstanceFilter exact_part_, disk_part_;
   bool any_exact_ = false;
+  unsigned x_shells_ = 0;
   ControlVariateVisibility& shared_;
   ShadingPoint point_;
   ProxyKind kind_ = ProxyKind::general;
@@ -119,8 +120,9 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
     disks_.add(balls, is_own && options.self_shadow == SelfShadow::heuristic);
     disk_bits |= instance_bit(i);
   }
-  disks_.finish();
+  disks_.finish(disks_.size() >= shared_.context_.options.disk_grid_from);
   exact_part_ = {.skip = -1, .only = -1, .bits = exact_bits};
+  x_shells_ = world.convex_shells_holding(point.position);
   disk_part_ = {.skip = -1, .only = -1, .bits = disk_bits};
   any_exact_ = exact_bits != 0;
 }
@@ -138,8 +140,13 @@ double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProba
   RenderStats& stats = *point_.stats;
   const double u = point_.choices->uniform();
   if (any_exact_) {
-    ++stats.exact_tests;
-    if (world.mesh_blocks(point_.position, end, exact_part_)) return 0;
+    // Instances whose convex shell holds both ends cannot block.
+    InstanceFilter exact = exact_part_;
+    exact.bits &= ~(x_shells_ & world.convex_shells_holding(end));
+    if (exact.bits != 0) {
+      ++stats.exact_tests;
+      if (world.mesh_blocks(point_.position, end, exact)) return 0;
+    }
   }
   ++stats.proxy_tests;
   const bool proxy_blocked = disks_.occludes(end, stats.disk_tests);

@@ -3,6 +3,8 @@
 
 #include "render/visibility/occluder_disks.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "render/visibility/visibility.h"
@@ -11,8 +13,12 @@ namespace visproxy {
 
 void OccluderDisks::reset(const Vertex& x, const Vertex& n) {
   x_ = x, n_ = n;
+  const Vertex helper = std::abs(n.x()) > 0.9 ? Vertex(0, 1, 0) : Vertex(1, 0, 0);
+  tangent_ = n.cross(helper).normalized();
+  bitangent_ = n.cross(tangent_);
   count_ = 0;
-  ux_.clear(), uy_.clear(), uz_.clear(), cos_.clear(), t_.clear();
+  disks_.clear();
+  grid_ = false;
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
@@ -27,18 +33,86 @@ void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic)
       u = v / t;
       cos_gamma = std::sqrt(t * t - ball.radius * ball.radius) / t;
     }
-    ux_.push_back(static_cast<float>(u.x())), uy_.push_back(static_cast<float>(u.y())), uz_.push_back(static_cast<float>(u.z()));
-    cos_.push_back(static_cast<float>(cos_gamma));
-    t_.push_back(static_cast<float>(t));
+    disks_.push(static_cast<float>(u.x()), static_cast<float>(u.y()), static_cast<float>(u.z()), static_cast<float>(cos_gamma),
+                static_cast<float>(t));
     ++count_;
   }
 }
 
-void OccluderDisks::finish() {
-  // Padding hides nothing: cos gamma above any cosine.
-  while (ux_.size() % kDiskBlock != 0) {
-    ux_.push_back(0), uy_.push_back(0), uz_.push_back(1), cos_.push_back(2), t_.push_back(0);
+namespace {
+
+// The cell of a projected point (p in [-1, 1]^2 for directions in front of the plane).
+int grid_cell(double px, double py) {
+  constexpr int side = OccluderDisks::kGridSide;
+  const int cx = std::clamp(static_cast<int>((px + 1) * 0.5 * side), 0, side - 1);
+  const int cy = std::clamp(static_cast<int>((py + 1) * 0.5 * side), 0, side - 1);
+  return cy * side + cx;
+}
+
+}  // namespace
+
+void OccluderDisks::finish(bool grid) {
+  grid_ = grid && count_ > 0;
+  if (grid_) {
+    // Stereographic projection from -n: a direction d maps to (d.t, d.b) / (1 + d.n), the
+    // front hemisphere into the unit disc, and a cap of axis u and half-angle gamma to the
+    // disc whose diameter joins the images of the cap's two points on u's meridian, at
+    // signed radii tan((theta -+ gamma) / 2) (theta: u's angle from n). Caps that hold -n
+    // (theta + gamma >= pi) or x (cos gamma < -1) reach every cell. Each cap goes into
+    // the cells its disc's bounding square meets, grown by a rounding margin; the cells'
+    // lists are laid out one after another by a counting sort.
+    constexpr int side = kGridSide, cells = side * side;
+    thread_local std::vector<std::array<std::int16_t, 4>> rectangles;  // x0, x1, y0, y1 per disk; x0 < 0: every cell
+    rectangles.resize(count_);
+    cell_start_.assign(cells + 1, 0);
+    for (std::size_t j = 0; j < count_; ++j) {
+      std::array<std::int16_t, 4>& r = rectangles[j];
+      r = {0, side - 1, 0, side - 1};
+      const double cos_gamma = disks_.cos[j];
+      if (cos_gamma < -1) continue;  // x inside the ball
+      const Vertex u(disks_.ux[j], disks_.uy[j], disks_.uz[j]);
+      const double sin_gamma = std::sqrt(std::max(0.0, 1 - cos_gamma * cos_gamma));
+      const double cos_theta = std::clamp(u.dot(n_), -1.0, 1.0), sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
+      const double cos_far = cos_theta * cos_gamma - sin_theta * sin_gamma, sin_far = sin_theta * cos_gamma + cos_theta * sin_gamma;
+      if (cos_far <= -1 + 1e-6 || (sin_far <= 0 && cos_far < 0)) continue;  // theta + gamma >= pi: the cap holds -n
+      const double cos_near = cos_theta * cos_gamma + sin_theta * sin_gamma, sin_near = sin_theta * cos_gamma - cos_theta * sin_gamma;
+      const double r_far = sin_far / (1 + cos_far), r_near = sin_near / (1 + cos_near);  // tan of half the angles
+      const double azimuth_x = u.dot(tangent_), azimuth_y = u.dot(bitangent_);
+      const double length = std::sqrt(azimuth_x * azimuth_x + azimuth_y * azimuth_y);
+      const double ax = length > 0 ? azimuth_x / length : 1, ay = length > 0 ? azimuth_y / length : 0;
+      // The margin covers the single-precision comparison: d . u > cos gamma in floats can hold
+      // up to about 2e-7 / sin gamma radians outside the cap (the projection at most doubles it).
+      const double centre = 0.5 * (r_far + r_near);
+      const double radius = 0.5 * std::abs(r_far - r_near) + 1e-4 * (1 + std::abs(centre)) + 1e-6 / std::max(sin_gamma, 1e-4);
+      const double cx = centre * ax, cy = centre * ay;
+      if (cx - radius > 1 || cx + radius < -1 || cy - radius > 1 || cy + radius < -1) {
+        r = {1, 0, 1, 0};  // misses the front: no cell
+        continue;
+      }
+      auto cell = [](double v) { return static_cast<std::int16_t>(std::clamp(static_cast<int>(std::floor((v + 1) * 0.5 * side)), 0, side - 1)); };
+      r = {cell(cx - radius), cell(cx + radius), cell(cy - radius), cell(cy + radius)};
+    }
+    for (std::size_t j = 0; j < count_; ++j) {
+      const auto& r = rectangles[j];
+      for (int y = r[2]; y <= r[3]; ++y)
+        for (int x = r[0]; x <= r[1]; ++x) ++cell_start_[static_cast<std::size_t>(y * side + x) + 1];
+    }
+    for (int c = 0; c < cells; ++c) cell_start_[static_cast<std::size_t>(c) + 1] += cell_start_[static_cast<std::size_t>(c)];
+    const std::size_t entries = cell_start_.back();
+    cells_.ux.resize(entries), cells_.uy.resize(entries), cells_.uz.resize(entries), cells_.cos.resize(entries), cells_.t.resize(entries);
+    thread_local std::vector<std::size_t> next;
+    next.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t j = 0; j < count_; ++j) {
+      const auto& r = rectangles[j];
+      for (int y = r[2]; y <= r[3]; ++y)
+        for (int x = r[0]; x <= r[1]; ++x) {
+          const std::size_t slot = next[static_cast<std::size_t>(y * side + x)]++;
+          cells_.ux[slot] = disks_.ux[j], cells_.uy[slot] = disks_.uy[j], cells_.uz[slot] = disks_.uz[j];
+          cells_.cos[slot] = disks_.cos[j], cells_.t[slot] = disks_.t[j];
+        }
+    }
   }
+  disks_.pad_to(kDiskBlock);
 }
 
 bool OccluderDisks::occludes(const Vertex& end, std::uint64_t& tests) const {
@@ -46,30 +120,108 @@ bool OccluderDisks::occludes(const Vertex& end, std::uint64_t& tests) const {
   const Vertex w = end - x_;
   const double z = w.norm();
   if (!(z > 0)) return false;
-  const Vertex d = w / z;
+  const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z()), zf = static_cast<float>(z);
   tests += count_;
-  return any_disk_occludes(ux_.data(), uy_.data(), uz_.data(), cos_.data(), t_.data(), ux_.size(), static_cast<float>(d.x()),
-                           static_cast<float>(d.y()), static_cast<float>(d.z()), static_cast<float>(z));
+  return any_disk_occludes(disks_.ux.data(), disks_.uy.data(), disks_.uz.data(), disks_.cos.data(), disks_.t.data(), disks_.ux.size(), dx,
+                           dy, dz, zf);
 }
 
 __attribute__((target_clones("avx2", "default"))) bool any_disk_occludes(const float* ux, const float* uy, const float* uz,
                                                                         const float* cos_gamma, const float* t, std::size_t n,
-                                                                        float dx, float dy, float dz, float z) {
+                                                                        float wx, float wy, float wz, float z) {
   constexpr std::size_t block = OccluderDisks::kDiskBlock;
   for (std::size_t base = 0; base < n; base += block) {
     int hidden = 0;
     for (std::size_t j = base; j < base + block; ++j)
-      hidden |= static_cast<int>(dx * ux[j] + dy * uy[j] + dz * uz[j] > cos_gamma[j]) & static_cast<int>(t[j] < z);
+      hidden |= static_cast<int>(wx * ux[j] + wy * uy[j] + wz * uz[j] > cos_gamma[j] * z) & static_cast<int>(t[j] < z);
     if (hidden != 0) return true;
   }
   return false;
 }
 
+void OccluderDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const {
+  std::fill(hidden.begin(), hidden.end(), std::uint8_t{0});
+  if (count_ == 0) return;
+  thread_local std::vector<float> wx, wy, wz, z;
+  thread_local std::vector<std::int32_t> any;
+  thread_local std::vector<std::uint32_t> order, cell_of;
+  thread_local std::vector<std::size_t> starts;
+  const std::size_t m = ends.size();
+  wx.resize(m), wy.resize(m), wz.resize(m), z.resize(m), any.assign(m, 0);
+  if (!grid_) {
+    for (std::size_t k = 0; k < m; ++k) {
+      const Vertex w = ends[k] - x_;
+      wx[k] = static_cast<float>(w.x()), wy[k] = static_cast<float>(w.y()), wz[k] = static_cast<float>(w.z());
+      z[k] = static_cast<float>(w.norm());
+    }
+    tests += count_ * m;
+    disks_hide_segments(disks_.ux.data(), disks_.uy.data(), disks_.uz.data(), disks_.cos.data(), disks_.t.data(), count_, wx.data(),
+                        wy.data(), wz.data(), z.data(), m, any.data());
+    for (std::size_t k = 0; k < m; ++k) hidden[k] = z[k] > 0 && any[k] != 0 ? 1 : 0;
+    return;
+  }
+  // The grid: segments sorted by the cell of their direction (counting sort), then each
+  // cell's disks against each cell's segments, disk by disk across the segments. Segments
+  // pointing too far from the hemisphere for the projection take every disk.
+  constexpr std::size_t cells = static_cast<std::size_t>(kGridSide) * kGridSide;
+  cell_of.resize(m), order.resize(m);
+  starts.assign(cells + 2, 0);
+  for (std::size_t k = 0; k < m; ++k) {
+    const Vertex w = ends[k] - x_;
+    const double length = w.norm(), up = length + w.dot(n_);
+    cell_of[k] = up > 1e-3 * length ? static_cast<std::uint32_t>(grid_cell(w.dot(tangent_) / up, w.dot(bitangent_) / up))
+                                    : static_cast<std::uint32_t>(cells);
+    ++starts[cell_of[k] + 1];
+  }
+  for (std::size_t c = 0; c <= cells; ++c) starts[c + 1] += starts[c];
+  {
+    thread_local std::vector<std::size_t> next;
+    next.assign(starts.begin(), starts.end() - 1);
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::size_t slot = next[cell_of[k]]++;
+      order[slot] = static_cast<std::uint32_t>(k);
+      const Vertex w = ends[k] - x_;
+      wx[slot] = static_cast<float>(w.x()), wy[slot] = static_cast<float>(w.y()), wz[slot] = static_cast<float>(w.z());
+      z[slot] = static_cast<float>(w.norm());
+    }
+  }
+  for (std::size_t c = 0; c <= cells; ++c) {
+    const std::size_t begin = starts[c], count = starts[c + 1] - begin;
+    if (count == 0) continue;
+    const Soa& source = c < cells ? cells_ : disks_;
+    const std::size_t first = c < cells ? cell_start_[c] : 0, disks = c < cells ? cell_start_[c + 1] - first : count_;
+    tests += disks * count;
+    disks_hide_segments(source.ux.data() + first, source.uy.data() + first, source.uz.data() + first, source.cos.data() + first,
+                        source.t.data() + first, disks, wx.data() + begin, wy.data() + begin, wz.data() + begin, z.data() + begin, count,
+                        any.data() + begin);
+  }
+  for (std::size_t slot = 0; slot < m; ++slot) hidden[order[slot]] = z[slot] > 0 && any[slot] != 0 ? 1 : 0;
+}
+
+__attribute__((target_clones("avx2", "default"))) void disks_hide_segments(const float* __restrict ux, const float* __restrict uy,
+                                                                          const float* __restrict uz,
+                                                                          const float* __restrict cos_gamma, const float* __restrict t,
+                                                                          std::size_t n, const float* __restrict wx,
+                                                                          const float* __restrict wy, const float* __restrict wz,
+                                                                          const float* __restrict z, std::size_t m,
+                                                                          std::int32_t* __restrict hidden) {
+  for (std::size_t j = 0; j < n; ++j) {
+    const float a = ux[j], b = uy[j], c = uz[j], cg = cos_gamma[j], tj = t[j];
+    // Selects rather than a short-circuit, so that the loop vectorises.
+    for (std::size_t k = 0; k < m; ++k) {
+      const float dot = wx[k] * a + wy[k] * b + wz[k] * c;
+      const std::int32_t in_cone = dot > cg * z[k] ? -1 : 0;
+      const std::int32_t before = tj < z[k] ? -1 : 0;
+      hidden[k] = hidden[k] | (in_cone & before);
+    }
+  }
+}
+
 __attribute__((optimize("no-tree-vectorize"))) bool any_disk_occludes_scalar(const float* ux, const float* uy, const float* uz,
                                                                              const float* cos_gamma, const float* t, std::size_t n,
-                                                                             float dx, float dy, float dz, float z) {
+                                                                             float wx, float wy, float wz, float z) {
   for (std::size_t j = 0; j < n; ++j)
-    if (t[j] < z && dx * ux[j] + dy * uy[j] + dz * uz[j] > cos_gamma[j]) return true;
+    if (t[j] < z && wx * ux[j] + wy * uy[j] + wz * uz[j] > cos_gamma[j] * z) return true;
   return false;
 }
 
@@ -92,7 +244,7 @@ class OccluderDiskPoint final : public PointVisibility {
   void begin(const ShadingPoint& point) override;
   double to_light(const Vertex& end) override { return connection(end); }
   double connection(const Vertex& end) override;
-  void connections(std::span<const Vertex> ends, std::span<double> out) override;
+  void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) override;
 
  private:
   const OccluderDiskVisibility& shared_;
@@ -103,6 +255,9 @@ class OccluderDiskPoint final : public PointVisibility {
   std::vector<Vertex> rest_;
   std::vector<std::size_t> rest_index_;
   std::vector<std::uint8_t> blocked_;
+  std::vector<unsigned> lanes_;
+  std::vector<std::uint8_t> hidden_;
+  unsigned x_shells_ = 0;
 };
 
 class OccluderDiskVisibility final : public Visibility {
@@ -132,35 +287,48 @@ void OccluderDiskPoint::begin(const ShadingPoint& point) {
     }
     disks_.add(balls, is_own && self == SelfShadow::heuristic);
   }
-  disks_.finish();
+  disks_.finish(disks_.size() >= shared_.context_.options.disk_grid_from);
   traced_ = InstanceFilter{.skip = -1, .only = -1, .bits = bits};
   any_traced_ = bits != 0;
+  x_shells_ = world.convex_shells_holding(point.position);
 }
 
 double OccluderDiskPoint::connection(const Vertex& end) {
   RenderStats& stats = *point_.stats;
   ++stats.proxy_tests;
   if (disks_.occludes(end, stats.disk_tests)) return 0;
-  if (!any_traced_) return 1;
+  // Traced instances whose convex shell holds both ends cannot block.
+  InstanceFilter traced = traced_;
+  traced.bits &= ~(x_shells_ & shared_.context_.world.convex_shells_holding(end));
+  if (traced.bits == 0) return 1;
   ++stats.exact_tests;
-  return shared_.context_.world.mesh_blocks(point_.position, end, traced_) ? 0 : 1;
+  return shared_.context_.world.mesh_blocks(point_.position, end, traced) ? 0 : 1;
 }
 
-void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<double> out) {
+void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
   RenderStats& stats = *point_.stats;
   rest_.clear(), rest_index_.clear();
   stats.proxy_tests += ends.size();
+  lanes_.clear();
+  const RenderWorld& world = shared_.context_.world;
+  hidden_.resize(ends.size());
+  disks_.occludes(ends, hidden_, stats.disk_tests);
   for (std::size_t i = 0; i < ends.size(); ++i) {
-    out[i] = disks_.occludes(ends[i], stats.disk_tests) ? 0 : 1;
-    if (out[i] != 0 && any_traced_) rest_.push_back(ends[i]), rest_index_.push_back(i);
+    out[i] = hidden_[i] ? 0 : 1;
+    if (out[i] == 0 || !any_traced_) continue;
+    // Traced instances whose convex shell holds both ends cannot block.
+    const unsigned lane = traced_.bits & ~(x_shells_ & (end_shells.empty() ? world.convex_shells_holding(ends[i]) : end_shells[i]));
+    if (lane == 0) continue;
+    rest_.push_back(ends[i]), rest_index_.push_back(i), lanes_.push_back(lane);
   }
   if (rest_.empty()) return;
   stats.exact_tests += rest_.size();
   blocked_.resize(rest_.size());
   if (shared_.context_.options.group_connections) {
-    shared_.context_.world.mesh_blocks(point_.position, rest_, blocked_, traced_);
+    world.mesh_blocks(point_.position, rest_, blocked_, traced_, lanes_);
   } else {
-    for (std::size_t k = 0; k < rest_.size(); ++k) blocked_[k] = shared_.context_.world.mesh_blocks(point_.position, rest_[k], traced_);
+    for (std::size_t k = 0; k < rest_.size(); ++k)
+      blocked_[k] = world.mesh_blocks(point_.position, rest_[k], {.skip = -1, .only = -1, .bits = lanes_[k]});
   }
   for (std::size_t k = 0; k < rest_.size(); ++k)
     if (blocked_[k]) out[rest_index_[k]] = 0;

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "render/render_world.h"
@@ -27,29 +28,60 @@ class OccluderDisks {
   /// Adds the balls of `spheres`; `self_heuristic` skips those with t < 2R (the shading
   /// point's own object, §4.2). A ball holding x (t <= R) hides every segment longer than t.
   void add(const std::vector<Sphere>& spheres, bool self_heuristic);
-  /// Pads the arrays; call after the last add() and before occludes().
-  void finish();
+  /// Pads the arrays; call after the last add() and before occludes(). With `grid`, also
+  /// sorts the disks into a grid over the stereographic projection of the hemisphere
+  /// around n (a spherical cap projects to a disc): each cell lists the disks whose cap
+  /// can reach it, so that the group form of occludes() compares a segment only with its
+  /// cell's disks. The answers are the same with and without the grid.
+  void finish(bool grid = false);
 
   /// Whether the segment from x to `end` is occluded by a disk; adds the disks compared to
   /// `tests`.
   bool occludes(const Vertex& end, std::uint64_t& tests) const;
+  /// occludes() for many segments from x: hidden[i] for the segment to ends[i]. The
+  /// comparisons run disk by disk across the segments (vectorised across segments); with
+  /// the grid, cell by cell: each cell's disks across the segments whose direction falls
+  /// into it.
+  void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
   std::size_t size() const { return count_; }
+  bool gridded() const { return grid_; }
+  /// Disk entries over all grid cells (each disk once per cell it reaches); 0 without grid.
+  std::size_t grid_entries() const { return grid_ ? cell_start_.back() : 0; }
+
+  /// Grid cells per side over [-1, 1]^2 of the projection.
+  static constexpr int kGridSide = 8;
 
  private:
-  Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ();
+  struct Soa {
+    std::vector<float> ux, uy, uz, cos, t;
+    void clear() { ux.clear(), uy.clear(), uz.clear(), cos.clear(), t.clear(); }
+    void push(float x, float y, float z, float c, float d) { ux.push_back(x), uy.push_back(y), uz.push_back(z), cos.push_back(c), t.push_back(d); }
+    void pad_to(std::size_t multiple) {
+      while (ux.size() % multiple != 0) push(0, 0, 1, 2, 0);  // hides nothing: cos gamma above any cosine
+    }
+  };
+  Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;
-  std::vector<float> ux_, uy_, uz_, cos_, t_;
+  Soa disks_;
+  bool grid_ = false;
+  Soa cells_;                            // every cell's disks, one after the other
+  std::vector<std::size_t> cell_start_;  // kGridSide^2 + 1 offsets into cells_
 };
 
-/// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides unit
-/// direction d at distance z: d . u_j > cos_j and t_j < z. Vectorised across disks,
-/// blocks of 16 at a time, with AVX2 where the processor has it.
+/// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
+/// segment to w = (wx, wy, wz) at distance z = |w|: w . u_j > cos_j z (cos delta > cos
+/// gamma) and t_j < z. Vectorised across disks, blocks of 16 at a time, with AVX2 where
+/// the processor has it.
 bool any_disk_occludes(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t, std::size_t n,
-                       float dx, float dy, float dz, float z);
+                       float wx, float wy, float wz, float z);
+/// hidden[k] |= whether disk j hides segment k, for every disk j < n and segment k < m
+/// (segments given as above: w_k and z_k). Vectorised across segments.
+void disks_hide_segments(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t, std::size_t n,
+                         const float* wx, const float* wy, const float* wz, const float* z, std::size_t m, std::int32_t* hidden);
 /// The same, one disk at a time with an early exit and no vectorisation: the baseline the
 /// benchmark compares with.
 bool any_disk_occludes_scalar(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t,
-                              std::size_t n, float dx, float dy, float dz, float z);
+                              std::size_t n, float wx, float wy, float wz, float z);
 
 /// The definition evaluated in double for one ball, for tests: cos delta > cos gamma and t < z,
 /// with a ball holding x hiding every segment longer than t.

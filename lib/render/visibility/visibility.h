@@ -40,9 +40,12 @@ class PointVisibility {
   /// A segment to a point that is not on a light (a virtual point light, moved off its
   /// surface by segment_end). Proofs that need one end on a light are not used for it.
   virtual double connection(const Vertex& end) = 0;
-  /// connection() for a group of ends; out[i] answers ends[i]. Strategies that trace the
-  /// group as packets of rays from the shared origin override it.
-  virtual void connections(std::span<const Vertex> ends, std::span<double> out) {
+  /// connection() for a group of ends; out[i] answers ends[i]. `end_shells`, empty or one
+  /// per end, holds RenderWorld::convex_shells_holding(ends[i]) when the caller knows it
+  /// (fixed ends such as VPLs). Strategies that trace the group as packets of rays from the
+  /// shared origin override it.
+  virtual void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
+    (void)end_shells;
     for (std::size_t i = 0; i < ends.size(); ++i) out[i] = connection(ends[i]);
   }
   /// After the point's last segment.
