@@ -14,6 +14,7 @@
 // Every mode renders the same VPLs (--vpl-seed), so clamping cancels out of the errors.
 //   visproxy-bench-vpl SCENE [--levels 1000,250,100,25,10] [--spp N] [--reference-spp R]
 //                      [--vpls N] [--width W] [--height H] [--cache DIR] [--images DIR]
+//                      [--correction-scales 200,50,25]  (control variate: percent)
 
 #include <algorithm>
 #include <chrono>
@@ -98,6 +99,7 @@ void disk_loop_benchmark() {
 int run(int argc, char** argv) {
   std::string scene_path;
   std::vector<int> levels = {1000, 250, 100, 25, 10};
+  std::vector<double> scales = {2, 0.5, 0.25};
   int spp = 2, reference_spp = 8, vpls = 1024, width = 0, height = 0;
   std::filesystem::path cache = default_proxy_cache(), images;
   for (int i = 1; i < argc; ++i) {
@@ -107,6 +109,10 @@ int run(int argc, char** argv) {
       return argv[++i];
     };
     if (arg == "--levels") levels = parse_levels(value());
+    else if (arg == "--correction-scales") {
+      scales.clear();
+      for (const int percent : parse_levels(value())) scales.push_back(percent / 100.0);
+    }
     else if (arg == "--spp") spp = std::stoi(value());
     else if (arg == "--reference-spp") reference_spp = std::stoi(value());
     else if (arg == "--vpls") vpls = std::stoi(value());
@@ -190,18 +196,22 @@ int run(int argc, char** argv) {
           write_png(images / ("spheres-" + std::to_string(level) + "-self-" + std::string(self_shadow_name(self)) + ".png"), r.image);
       }
     }
-    RenderOptions cv = base;
-    cv.visibility = VisibilityMode::stochastic;
-    cv.estimator = StochasticEstimator::control_variate;
-    cv.probabilities = ProbabilityMode::learned;
-    const RenderResult c = render(scene, world, cv);
-    control_variates.push_back({spec + " control variate, learned", c.stats.seconds, mse(c.image, grouped_result.image),
-                                mse(c.image, reference.image)});
-    if (!images.empty()) write_png(images / ("control-variate-" + std::to_string(level) + ".png"), c.image);
-    std::printf("  %s: occluder disks %.2f s, control variate %.2f s (exact corrections per connection %.3f)\n", spec.c_str(),
-                s.stats.seconds, c.stats.seconds,
-                static_cast<double>(c.stats.corrections_after_hit + c.stats.corrections_after_miss) /
-                    static_cast<double>(std::max<std::uint64_t>(c.stats.vpl_connections + c.stats.shadow_rays, 1)));
+    for (const double scale : scales) {
+      RenderOptions cv = base;
+      cv.visibility = VisibilityMode::stochastic;
+      cv.estimator = StochasticEstimator::control_variate;
+      cv.probabilities = ProbabilityMode::learned;
+      cv.correction_scale = scale;
+      const RenderResult c = render(scene, world, cv);
+      char label[96];
+      std::snprintf(label, sizeof label, " control variate, learned, scale %g", scale);
+      control_variates.push_back({spec + label, c.stats.seconds, mse(c.image, grouped_result.image), mse(c.image, reference.image)});
+      if (!images.empty() && scale == scales.front()) write_png(images / ("control-variate-" + std::to_string(level) + ".png"), c.image);
+      std::printf("  %s: occluder disks %.2f s; control variate (scale %g) %.2f s, exact corrections per connection %.3f\n", spec.c_str(),
+                  s.stats.seconds, scale, c.stats.seconds,
+                  static_cast<double>(c.stats.corrections_after_hit + c.stats.corrections_after_miss) /
+                      static_cast<double>(std::max<std::uint64_t>(c.stats.vpl_connections + c.stats.shadow_rays, 1)));
+    }
   }
 
   std::printf("\nVisibility of the VPL connections (same samples and VPLs in every mode; MSE over pixels and RGB):\n\n");

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -30,6 +31,9 @@ struct CompareOptions {
   std::uint64_t seed = 1;
   int width = 0, height = 0;
   int convergence_points = 4;
+  IntegratorKind integrator = IntegratorKind::direct;
+  int vpls = 1024, bounces = 1;
+  std::uint64_t vpl_seed = 1;
   int count_passes = 4;
   bool no_count = false;
 };
@@ -58,6 +62,10 @@ std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOpti
     r.spp = 1 << 24;
     r.shadow_rays = o.shadow_rays;
     r.seed = o.seed;
+    r.integrator = o.integrator;
+    r.vpls = o.vpls;
+    r.bounces = o.bounces;
+    r.vpl_seed = o.vpl_seed;
     return r;
   };
   std::vector<Mode> out{{"exact", "", base(VisibilityMode::exact)}, {"bounds", "", base(VisibilityMode::bounds)}};
@@ -74,6 +82,9 @@ std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOpti
     out.push_back({spec + " control variate equal", spec, control});
     control.probabilities = ProbabilityMode::learned;
     out.push_back({spec + " control variate learned", spec, control});
+    // Sphere sets with VPLs: the occluder disks themselves (biased by design).
+    if (o.integrator == IntegratorKind::vpl && spec.starts_with("spheres:"))
+      out.push_back({spec + " occluder disks", spec, base(VisibilityMode::spheres)});
   }
   return out;
 }
@@ -140,6 +151,12 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1 << 20));
   command->add_flag("--no-count", o->no_count, "Skip the counted re-renders (traversal steps and primitive tests: nan)");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: as for render]");
+  const std::map<std::string, IntegratorKind> integrators{{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}};
+  command->add_option("--integrator", o->integrator, "direct, or vpl (virtual point lights; adds occluder-disk modes for sphere sets) [default: direct]")
+      ->transform(CLI::CheckedTransformer(integrators, CLI::ignore_case));
+  command->add_option("--vpls", o->vpls, "vpl: light paths [default: 1024]")->check(CLI::Range(1, 1 << 22));
+  command->add_option("--bounces", o->bounces, "vpl: VPLs per light path [default: 1]")->check(CLI::Range(1, 64));
+  command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, shared by the reference and every mode [default: 1]");
   command->add_option("--width", o->width, "Override the camera's image width")->check(CLI::Range(1, 16384));
   command->add_option("--height", o->height, "Override the camera's image height")->check(CLI::Range(1, 16384));
 
@@ -201,6 +218,11 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       r.spp = o->reference_spp;
       r.shadow_rays = o->shadow_rays;
       r.seed = o->seed + 1000003;
+      // The same VPLs as every mode, so that their clamping cancels out of the errors.
+      r.integrator = o->integrator;
+      r.vpls = o->vpls;
+      r.bounces = o->bounces;
+      r.vpl_seed = o->vpl_seed;
       const std::string label = "exact reference, " + std::to_string(o->reference_spp) + " spp";
       if (terminal) r.on_pass = [&](int passes, double seconds) { draw_progress(label, double(passes) / r.spp, passes, seconds); };
       else std::cerr << "visproxy compare: rendering the " << label << "\n";

@@ -93,6 +93,40 @@ TEST_F(CliRender, GeneratedHairballBoundsMatchesExact) {
   expect_bounds_identical_and_finite(*this, folder_ / "hairball" / "hairball.json", "--width 40 --height 30");
 }
 
+// The shipped VPL scenes are described by the schema and render with virtual point
+// lights: exact (packets and single rays give one image), occluder disks of a sphere set,
+// the control variate with them; the stats say how many VPLs there were and what the clamp
+// dropped, and are described by the schema. Bad VPL options get one line and no image.
+TEST_F(CliRender, KnotRoomRendersWithVirtualPointLights) {
+  const std::filesystem::path scenes = std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/scenes";
+  for (const char* name : {"knot-room.json", "armadillo-room.json"})
+    testing::expect_described(json::parse(read_file(scenes / name)), "scene.schema.json");
+  const std::filesystem::path knot = scenes / "knot-room.json";
+  const std::string size = "--integrator vpl --vpls 48 --bounces 2 --spp 2 --width 24 --height 20 ";
+  ASSERT_EQ(render(knot, "vpl-exact", size).exit_code, 0);
+  const auto single = render(knot, "vpl-single", size + "--single-rays");
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  EXPECT_EQ(image("vpl-exact").pixels, image("vpl-single").pixels);
+  const auto disks = render(knot, "vpl-disks", size + "--visibility spheres --proxy spheres:25 --self-shadow heuristic");
+  ASSERT_EQ(disks.exit_code, 0) << disks.err;
+  const auto cv = render(knot, "vpl-cv", size + "--visibility stochastic --estimator control-variate --probabilities learned --proxy spheres:25");
+  ASSERT_EQ(cv.exit_code, 0) << cv.err;
+  for (const char* name : {"vpl-exact", "vpl-single", "vpl-disks", "vpl-cv"}) {
+    const json stats = json::parse(read_file(folder_ / (std::string(name) + ".stats.json")));
+    testing::expect_described(stats, "render-stats.schema.json");
+    EXPECT_EQ(stats.at("integrator"), "vpl") << name;
+    EXPECT_GT(stats.at("stats").at("integrator").at("virtual_point_lights").get<int>(), 0) << name;
+    EXPECT_GT(stats.at("stats").at("vpl_connections").get<std::uint64_t>(), 0u) << name;
+    EXPECT_TRUE(all_finite(image(name))) << name;
+  }
+  EXPECT_GT(json::parse(read_file(folder_ / "vpl-disks.stats.json")).at("stats").at("disk_tests").get<std::uint64_t>(), 0u);
+  EXPECT_NE(disks.out.find("VPLs ("), std::string::npos) << disks.out;
+  const auto bad = render(knot, "vpl-bad", "--integrator vpl --vpls 0");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--vpls"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "vpl-bad.pfm"));
+}
+
 // OpenEXR output holds the same linear image as the PFM (both store 32-bit floats).
 TEST_F(CliRender, ExrOutputHoldsTheSameLinearImage) {
   const std::string options = "--spp 2 --seed 4 --width 12 --height 10";

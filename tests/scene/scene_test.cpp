@@ -24,7 +24,7 @@ json full_scene() {
     "format_version": 1,
     "description": "every key of the format",
     "meshes": {
-      "floor": {"positions": [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], "triangles": [[0, 2, 1], [0, 3, 2]]},
+      "floor": {"positions": [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], "triangles": [[0, 2, 1], [0, 3, 2]], "subdivide": 1},
       "tall box": {"positions": [[0, 0, 0], [1, 0, 0], [0, 2, 0], [0, 0, 1]],
                    "triangles": [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]}
     },
@@ -72,6 +72,7 @@ TEST(Scene, ReadsEveryKey) {
   const Scene scene = parse(full_scene());
   ASSERT_EQ(scene.meshes.size(), 2u);
   EXPECT_EQ(scene.mesh("tall box").mesh.triangles.size(), 4u);
+  EXPECT_EQ(scene.mesh("floor").mesh.triangles.size(), 8u);  // subdivided once
   ASSERT_EQ(scene.instances.size(), 2u);
   EXPECT_EQ(scene.instances[0].transform.linear().diagonal(), Eigen::Vector3d(2, 1, 2));
   EXPECT_EQ(scene.instances[1].albedo, Color::Constant(0.7));
@@ -166,6 +167,9 @@ INSTANTIATE_TEST_SUITE_P(
                   "instances[0].transform: places the mesh beyond 1e100 in magnitude, which geometry in double "
                   "precision cannot square and cube"},
         Malformed{"two_sided_text", "/lights/1/two_sided", "yes", "lights[1].two_sided: must be true or false"},
+        Malformed{"subdivide_too_deep", "/meshes/floor/subdivide", 5, "meshes.floor.subdivide: expected an integer from 0 to 4"},
+        Malformed{"subdivide_negative", "/meshes/floor/subdivide", -1, "meshes.floor.subdivide: expected an integer from 0 to 4"},
+        Malformed{"subdivide_text", "/meshes/floor/subdivide", "2", "meshes.floor.subdivide: expected an integer from 0 to 4"},
         Malformed{"light_type_unknown", "/lights/0/type", "spot",
                   "lights[0].type: must be \"parallelogram\" or \"mesh\""},
         Malformed{"light_type_number", "/lights/0/type", 1, "lights[0].type: must be \"parallelogram\" or \"mesh\""},
@@ -221,6 +225,30 @@ TEST_F(SceneMeshFile, IsReadRelativeToTheSceneWithItsWarningsPassedOn) {
   EXPECT_THROW(
       parse_scene(with(full_scene(), "/meshes/floor", {{"file", "nowhere.off"}}).dump(), folder_ / "scene.json"),
       IOError);
+}
+
+// A mesh file of 262 088 triangles subdivided 4 times would hold 67 M triangles: refused
+// before any is made, naming the JSON path.
+TEST_F(SceneMeshFile, SubdivisionBeyond64MTrianglesIsRefused) {
+  constexpr int side = 363;  // vertices per row: 2 x 362^2 = 262088 triangles
+  std::string off = "OFF\n" + std::to_string(side * side) + " " + std::to_string(2 * (side - 1) * (side - 1)) + " 0\n";
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) off += std::to_string(x) + " " + std::to_string(y) + " 0\n";
+  for (int y = 0; y + 1 < side; ++y)
+    for (int x = 0; x + 1 < side; ++x) {
+      const int a = y * side + x, b = a + 1, c = a + side, d = c + 1;
+      off += "3 " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(d) + "\n3 " + std::to_string(a) + " " +
+             std::to_string(d) + " " + std::to_string(c) + "\n";
+    }
+  std::ofstream(folder_ / "grid.off") << off;
+  const json scene = with(full_scene(), "/meshes/floor", {{"file", "grid.off"}, {"subdivide", 4}});
+  try {
+    parse_scene(scene.dump(), folder_ / "scene.json");
+    ADD_FAILURE() << "accepted";
+  } catch (const InvalidInputError& error) {
+    EXPECT_EQ(std::string(error.what()), (folder_ / "scene.json").string() +
+                                             ": meshes.floor.subdivide: would make 262088 x 4^4 triangles, more than 64000000");
+  }
 }
 
 TEST(Scene, FileAndInlineGeometryExcludeEachOther) {

@@ -1,6 +1,7 @@
 // Stochastic visibility with the proxy as a control variate: V' + (V - V') [u < q] / q, with
 // q chosen by the proxy's answer (equal, adaptive from probe rays, or learned per pixel).
 
+#include <span>
 #include <vector>
 
 #include "render/visibility/occluder_disks.h"
@@ -43,6 +44,7 @@ class ControlVariatePoint final : public PointVisibility {
   double connection(const Vertex& end) override {
     return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, connection_corrections_);
   }
+  void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) override;
 
  private:
   double answer(const Vertex& end, const CorrectionProbabilities& q);
@@ -55,6 +57,12 @@ class ControlVariatePoint final : public PointVisibility {
   InstanceFilter exact_part_, disk_part_;
   bool any_exact_ = false;
   unsigned x_shells_ = 0;
+  // connections(): per end, the lanes' filters and answers (kept to reuse their memory)
+  std::vector<Vertex> traced_ends_;
+  std::vector<unsigned> traced_lanes_;
+  std::vector<std::size_t> traced_index_;
+  std::vector<std::uint8_t> blocked_, hidden_;
+  std::vector<double> trace_probability_;
   ControlVariateVisibility& shared_;
   ShadingPoint point_;
   ProxyKind kind_ = ProxyKind::general;
@@ -125,6 +133,68 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   x_shells_ = world.convex_shells_holding(point.position);
   disk_part_ = {.skip = -1, .only = -1, .bits = disk_bits};
   any_exact_ = exact_bits != 0;
+}
+
+// A group of connections with disks as V': the same estimate per connection as
+// disk_answer(), with the exact parts and the corrections traced as packets. The
+// probabilities are those the point began with (learned ones are updated after the group
+// from every correction it traced): they depend only on draws made before the group, so
+// each estimate stays unbiased.
+void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
+  if (!disks_in_use_) return PointVisibility::connections(ends, end_shells, out);
+  const RenderWorld& world = shared_.context_.world;
+  RenderStats& stats = *point_.stats;
+  const std::size_t m = ends.size();
+  const CorrectionProbabilities q = connection_corrections_;
+  auto shells = [&](std::size_t i) { return end_shells.empty() ? world.convex_shells_holding(ends[i]) : end_shells[i]; };
+  // 1. The exactly traced part (own instance, instances without sphere sets), where no
+  //    convex shell clears it.
+  blocked_.assign(m, 0);
+  if (any_exact_) {
+    traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
+    for (std::size_t i = 0; i < m; ++i) {
+      const unsigned lane = exact_part_.bits & ~(x_shells_ & shells(i));
+      if (lane != 0) traced_ends_.push_back(ends[i]), traced_lanes_.push_back(lane), traced_index_.push_back(i);
+    }
+    if (!traced_ends_.empty()) {
+      stats.exact_tests += traced_ends_.size();
+      std::vector<std::uint8_t>& answers = hidden_;
+      answers.resize(traced_ends_.size());
+      world.mesh_blocks(point_.position, traced_ends_, answers, {}, traced_lanes_);
+      for (std::size_t k = 0; k < traced_ends_.size(); ++k) blocked_[traced_index_[k]] = answers[k];
+    }
+  }
+  // 2. V' from the disks, all ends at once.
+  std::vector<std::uint8_t> proxy(m);
+  disks_.occludes(ends, proxy, stats.disk_tests);
+  // 3. The corrections each connection draws, traced as packets.
+  traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
+  trace_probability_.assign(m, 0);
+  for (std::size_t i = 0; i < m; ++i) {
+    const double u = point_.choices->uniform();  // drawn for every connection, as disk_answer() does
+    out[i] = 0;
+    if (blocked_[i]) continue;
+    ++stats.proxy_tests;
+    const double p = proxy[i] ? q.after_hit : q.after_miss;
+    trace_probability_[i] = p;
+    *point_.p1_sum += 1 - p;
+    *point_.p1_count += 1;
+    out[i] = proxy[i] ? 0.0 : 1.0;
+    if (u < p) {
+      ++(proxy[i] ? stats.corrections_after_hit : stats.corrections_after_miss);
+      traced_ends_.push_back(ends[i]), traced_lanes_.push_back(disk_part_.bits), traced_index_.push_back(i);
+    }
+  }
+  if (traced_ends_.empty()) return;
+  stats.exact_tests += traced_ends_.size();
+  hidden_.resize(traced_ends_.size());
+  world.mesh_blocks(point_.position, traced_ends_, hidden_, {}, traced_lanes_);
+  for (std::size_t k = 0; k < traced_ends_.size(); ++k) {
+    const std::size_t i = traced_index_[k];
+    const double v = proxy[i] ? 0.0 : 1.0;
+    out[i] = v + ((hidden_[k] ? 0.0 : 1.0) - v) / trace_probability_[i];
+    learn(proxy[i] != 0, hidden_[k] != 0);
+  }
 }
 
 void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
