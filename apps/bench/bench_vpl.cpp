@@ -135,6 +135,13 @@ int run(int argc, char** argv) {
   if (!images.empty()) std::filesystem::create_directories(images);
 
   const RenderOptions base{.integrator = IntegratorKind::vpl, .spp = spp, .shadow_rays = 1, .seed = 1, .vpls = vpls, .vpl_seed = 1};
+  // The control variate: each correction scale with visibility splitting (the own instance
+  // traced exactly), and the smaller ones without (the own instance's disks, with the
+  // self-shadowing heuristic, corrected like the others).
+  std::vector<std::pair<double, bool>> cv_variants;
+  for (const double scale : scales) cv_variants.push_back({scale, true});
+  for (const double scale : scales)
+    if (scale < 1) cv_variants.push_back({scale, false});
   std::printf("visproxy-bench-vpl: %s, %zu triangles, %dx%d, %d spp x (1 light sample + %d light paths' VPLs), seed 1, VPL seed 1; "
               "reference: exact, %d spp, seed 2\n",
               scene_path.c_str(), triangles, scene.camera.width, scene.camera.height, spp, vpls, reference_spp);
@@ -196,19 +203,20 @@ int run(int argc, char** argv) {
           write_png(images / ("spheres-" + std::to_string(level) + "-self-" + std::string(self_shadow_name(self)) + ".png"), r.image);
       }
     }
-    for (const double scale : scales) {
+    for (const auto& [scale, split] : cv_variants) {
       RenderOptions cv = base;
+      cv.split = split;
       cv.visibility = VisibilityMode::stochastic;
       cv.estimator = StochasticEstimator::control_variate;
       cv.probabilities = ProbabilityMode::learned;
       cv.correction_scale = scale;
       const RenderResult c = render(scene, world, cv);
       char label[96];
-      std::snprintf(label, sizeof label, " control variate, learned, scale %g", scale);
+      std::snprintf(label, sizeof label, " control variate, learned, scale %g%s", scale, split ? "" : ", no split");
       control_variates.push_back({spec + label, c.stats.seconds, mse(c.image, grouped_result.image), mse(c.image, reference.image)});
-      if (!images.empty() && scale == scales.front()) write_png(images / ("control-variate-" + std::to_string(level) + ".png"), c.image);
-      std::printf("  %s: occluder disks %.2f s; control variate (scale %g) %.2f s, exact corrections per connection %.3f\n", spec.c_str(),
-                  s.stats.seconds, scale, c.stats.seconds,
+      if (!images.empty() && scale == scales.back() && !split) write_png(images / ("control-variate-" + std::to_string(level) + ".png"), c.image);
+      std::printf("  %s: occluder disks %.2f s; control variate (scale %g%s) %.2f s, exact corrections per connection %.3f\n",
+                  spec.c_str(), s.stats.seconds, scale, split ? "" : ", no split", c.stats.seconds,
                   static_cast<double>(c.stats.corrections_after_hit + c.stats.corrections_after_miss) /
                       static_cast<double>(std::max<std::uint64_t>(c.stats.vpl_connections + c.stats.shadow_rays, 1)));
     }

@@ -28,7 +28,7 @@ struct RenderCommandOptions {
   double vpl_clamp = 0.05;
   SelfShadow self_shadow = SelfShadow::heuristic;
   bool single_rays = false;
-  std::size_t disk_grid_from = 256;
+  std::size_t disk_grid_from = 4096;
   ProbabilityMode probabilities = ProbabilityMode::equal;
   StochasticEstimator estimator = StochasticEstimator::term_choice;
   int probe_passes = 0;
@@ -99,7 +99,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
       ->transform(CLI::CheckedTransformer(self_shadows, CLI::ignore_case));
   command->add_option("--disk-grid-from", o->disk_grid_from,
                       "Occluder disks: sort a shading point's disks into a grid over the directions when it has at least this "
-                      "many (0: always) [default: 256]");
+                      "many (0: always) [default: 4096]");
   command->add_flag("--single-rays", o->single_rays, "vpl: trace the connections of a shading point one ray at a time, not as packets");
   const std::map<std::string, ProbabilityMode> probability_modes{
       {"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}};
@@ -254,6 +254,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"proxy_notes", world.notes()},
         {"stats", result.stats.to_json()}};
     write_file_atomically(stats, document.dump(2) + "\n");
+    const double segments = static_cast<double>(std::max<std::uint64_t>(result.stats.shadow_rays + result.stats.vpl_connections, 1));
     std::string vpl_text;
     if (o->integrator == IntegratorKind::vpl) {
       char text[200];
@@ -264,14 +265,15 @@ void add_render_command(CLI::App& app, int& exit_code) {
       vpl_text = text;
     }
     std::printf("visproxy render: %s, %dx%d, %s integrator, %s visibility, %d spp x %d shadow rays, seed %llu: %.2f s, %llu shadow rays "
-                "(%.2f exact and %.2f proxy tests per shadow ray)%s\n  %s\n  %s\n  %s\n",
+                "(%.2f exact and %.2f proxy tests per %s)%s\n  %s\n  %s\n  %s\n",
                 o->scene.string().c_str(), scene.camera.width, scene.camera.height,
                 std::string(integrator_name(o->integrator)).c_str(),
                 std::string(visibility_mode_name(o->visibility)).c_str(), result.stats.passes, o->shadow_rays,
                 static_cast<unsigned long long>(o->seed), result.stats.seconds,
                 static_cast<unsigned long long>(result.stats.shadow_rays),
-                result.stats.to_json()["exact_tests_per_shadow_ray"].get<double>(),
-                result.stats.to_json()["proxy_tests_per_shadow_ray"].get<double>(), vpl_text.c_str(), o->output.string().c_str(),
+                static_cast<double>(result.stats.exact_tests) / segments, static_cast<double>(result.stats.proxy_tests) / segments,
+                o->integrator == IntegratorKind::vpl ? "segment: shadow ray or VPL connection" : "shadow ray", vpl_text.c_str(),
+                o->output.string().c_str(),
                 png.string().c_str(), stats.string().c_str());
     exit_code = all_finite(result.image) ? kSuccess : kInternalError;
     if (exit_code != kSuccess) std::cerr << "visproxy render: the image holds NaN or infinite values\n";

@@ -72,7 +72,7 @@ struct RenderOptions {
   /// Occluder disks (spheres visibility, and the control variate's V' with VPLs): sort a
   /// shading point's disks into a grid over the directions (OccluderDisks::finish) when it
   /// has at least this many; fewer are compared one block after another.
-  std::size_t disk_grid_from = 256;
+  std::size_t disk_grid_from = 4096;
   double seconds = 0;              ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;
