@@ -210,6 +210,34 @@ TEST(VplIntegrator, WhiteFurnaceMatchesTheClosedForm) {
   }
 }
 
+// Bounds with VPLs gives the exact image bit for bit: its light samples use the proofs of a
+// box's outside proxy, its VPL connections are traced as exact traces them (packets or
+// single rays alike).
+TEST(VplIntegrator, BoundsGivesTheExactImage) {
+  Scene scene = floor_and_ceiling(false);
+  scene.meshes.push_back({"box", {}, box({-0.3, -0.3, 0.2}, {0.3, 0.3, 0.5}), {}});
+  scene.instances.push_back({"box", Eigen::Affine3d::Identity(), Color::Constant(0.6), {}});
+  scene.camera.from = {0, -3, 1.5};
+  scene.camera.at = {0, 0, 0.3};
+  scene.camera.up = {0, 0, 1};
+  scene.camera.fov_degrees = 50;
+  scene.camera.width = 40;
+  scene.camera.height = 24;
+  std::vector<MeshProxies> proxies(scene.instances.size());
+  proxies[2].outside = InstanceProxy{ProxyKind::outside, "aabb", box({-0.35, -0.35, 0.15}, {0.35, 0.35, 0.55}), {}, true};
+  const RenderWorld world(scene, proxies);
+  for (const bool group : {true, false}) {
+    RenderOptions options{.integrator = IntegratorKind::vpl, .spp = 2, .shadow_rays = 2, .seed = 5, .vpls = 64, .bounces = 2};
+    options.group_connections = group;
+    const RenderResult exact = render(scene, world, options);
+    options.visibility = VisibilityMode::bounds;
+    const RenderResult bounds = render(scene, world, options);
+    EXPECT_EQ(exact.image.pixels, bounds.image.pixels) << "group " << group;
+    EXPECT_GT(bounds.stats.bounds_unoccluded, 0u);
+    EXPECT_GT(bounds.stats.vpl_connections, 0u);
+  }
+}
+
 TEST(VplIntegrator, OptionsThatCannotGiveACorrectImageAreRefused) {
   const Scene scene = floor_and_ceiling(false);
   const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
