@@ -86,8 +86,10 @@ void validate(const RenderOptions& options) {
     if (options.virtual_point_lights)
       for (const VirtualPointLight& light : *options.virtual_point_lights)
         if (!light.position.allFinite() || !light.power.allFinite() || !light.brdf.allFinite() || (light.power.array() < 0).any() ||
-            (light.brdf.array() < 0).any() || !(std::abs(light.normal.norm() - 1) < 1e-6))
-          fail("virtual point lights need finite positions, unit normals and finite, non-negative power and BRDF");
+            (light.brdf.array() < 0).any() || !(std::abs(light.normal.norm() - 1) < 1e-6) || light.bounce < 1 ||
+            !(light.distance >= 0) || !std::isfinite(light.distance))
+          fail("virtual point lights need finite positions, unit normals, finite, non-negative power and BRDF, a bounce "
+               "of at least 1 and a finite, non-negative distance");
   }
   if (options.visibility != VisibilityMode::stochastic) return;
   const bool control_variate = options.estimator == StochasticEstimator::control_variate;

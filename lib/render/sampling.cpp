@@ -28,9 +28,9 @@ LightSample LightSampler::sample(PixelRandom& random) const {
           t.light->two_sided};
 }
 
-Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& normal, const Vertex& from) {
+Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& normal, const Vertex& from, double distance) {
   const double side = normal.dot(from - end) >= 0 ? 1.0 : -1.0;
-  return end + side * world.surface_offset(end, 0.0) * normal;
+  return end + side * world.surface_offset(end, distance) * normal;
 }
 
 CameraRays::CameraRays(const Camera& camera)

@@ -64,9 +64,10 @@ class LightSampler {
 
 /// The end of a shadow segment at a point `end` on a surface of normal `normal` (a light
 /// sample, a virtual point light): moved off that plane, towards the side `from` is on, by
-/// the world's rounding offset, so that the surface the end lies on cannot shadow it
-/// through float rounding.
-Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& normal, const Vertex& from);
+/// the world's rounding offset (RenderWorld::surface_offset with `distance`, the length of
+/// the ray that found the point, 0 for points sampled on a surface), so that the surface
+/// the end lies on cannot shadow it through float rounding.
+Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& normal, const Vertex& from, double distance = 0);
 inline Vertex light_end(const RenderWorld& world, const LightSample& y, const Vertex& x) {
   return segment_end(world, y.position, y.normal, x);
 }

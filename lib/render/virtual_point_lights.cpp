@@ -32,7 +32,7 @@ std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, co
       }
       if (!hit || hit->light >= 0) break;
       const Color albedo = scene.instances[static_cast<std::size_t>(hit->instance)].albedo;
-      lights.push_back({hit->position, hit->normal, power, albedo / std::numbers::pi, hit->instance, bounce});
+      lights.push_back({hit->position, hit->normal, power, albedo / std::numbers::pi, hit->instance, bounce, hit->distance});
       if (++bounce > options.bounces) break;
       power = power.cwiseProduct(albedo);
       if (power.maxCoeff() <= 0) break;

@@ -19,6 +19,9 @@ struct VirtualPointLight {
   Color brdf;       ///< the surface's Lambertian BRDF there: albedo / pi
   int instance = -1;
   int bounce = 1;   ///< 1 at the path's first hit
+  /// Length of the ray that found the point (world units): its position carries rounding of
+  /// that length, which the end of its connections must clear (RenderWorld::surface_offset).
+  double distance = 0;
 };
 
 struct VplOptions {

@@ -106,7 +106,8 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
 
 // The grid against the linear loop where its projection is stretched: balls up to 1.5
 // units wide within 2 units (caps near a hemisphere wide, caps holding -n, balls holding x
-// or straddling the tangent plane), and ends grazing the plane.
+// or straddling the tangent plane), ends grazing the plane, and ends behind it (which an
+// API user may ask about; integrators never do).
 TEST(OccluderDisks, GridAgreesWithTheLinearLoopForWideAndGrazingCaps) {
   Random random(31337);
   std::uint64_t tests = 0, occluded = 0, checks = 0;
@@ -126,6 +127,7 @@ TEST(OccluderDisks, GridAgreesWithTheLinearLoopForWideAndGrazingCaps) {
       if (direction.dot(n) < 0) direction -= 2 * direction.dot(n) * n;
       if (e % 4 == 0) direction = (direction - 0.999 * direction.dot(n) * n).normalized();  // grazing
       if (e % 16 == 1) direction = -n;  // behind the plane: outside the projection's reach
+      if (e % 16 == 2) direction = (-(0.8 + 0.199 * random.uniform()) * n + 0.5 * random_unit(random)).normalized();
       ends.push_back((0.1 + 5 * random.uniform()) * direction);
       answers.push_back(linear.occludes(ends.back(), tests) ? 1 : 0);
       occluded += answers.back();

@@ -28,7 +28,7 @@ class VplIntegrator final : public Integrator {
     // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its end,
     // moved off the surface towards that side, is the same for every shading point.
     for (const VirtualPointLight& light : lights_) {
-      ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal));
+      ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal, light.distance));
       end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
     }
     BoundingBox box;
@@ -87,7 +87,7 @@ class VplIntegrator final : public Integrator {
     double energy = 0, dropped = 0;
     for (std::size_t i = 0; i < energy_.size(); ++i) energy += energy_[i], dropped += dropped_[i];
     std::size_t by_bounce[8] = {};
-    for (const VirtualPointLight& light : lights_) ++by_bounce[std::min(light.bounce, 7)];
+    for (const VirtualPointLight& light : lights_) ++by_bounce[std::clamp(light.bounce, 1, 7)];
     nlohmann::json bounces = nlohmann::json::array();
     for (int b = 1; b < 8; ++b)
       if (by_bounce[b] > 0) bounces.push_back(by_bounce[b]);

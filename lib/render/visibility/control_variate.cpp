@@ -141,7 +141,7 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
 // from every correction it traced): they depend only on draws made before the group, so
 // each estimate stays unbiased.
 void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
-  if (!disks_in_use_) return PointVisibility::connections(ends, end_shells, out);
+  if (!disks_in_use_ || !shared_.context_.options.group_connections) return PointVisibility::connections(ends, end_shells, out);
   const RenderWorld& world = shared_.context_.world;
   RenderStats& stats = *point_.stats;
   const std::size_t m = ends.size();

@@ -162,15 +162,17 @@ void OccluderDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_
   }
   // The grid: segments sorted by the cell of their direction (counting sort), then each
   // cell's disks against each cell's segments, disk by disk across the segments. Segments
-  // pointing too far from the hemisphere for the projection take every disk.
+  // that do not leave in front of the tangent plane take every disk.
   constexpr std::size_t cells = static_cast<std::size_t>(kGridSide) * kGridSide;
   cell_of.resize(m), order.resize(m);
   starts.assign(cells + 2, 0);
   for (std::size_t k = 0; k < m; ++k) {
     const Vertex w = ends[k] - x_;
-    const double length = w.norm(), up = length + w.dot(n_);
-    cell_of[k] = up > 1e-3 * length ? static_cast<std::uint32_t>(grid_cell(w.dot(tangent_) / up, w.dot(bitangent_) / up))
-                                    : static_cast<std::uint32_t>(cells);
+    // Only directions in front of the tangent plane project into the unit disc, where the
+    // margin holds; the others are compared with every disk.
+    const double length = w.norm(), along = w.dot(n_), up = length + along;
+    cell_of[k] = along > 0 ? static_cast<std::uint32_t>(grid_cell(w.dot(tangent_) / up, w.dot(bitangent_) / up))
+                           : static_cast<std::uint32_t>(cells);
     ++starts[cell_of[k] + 1];
   }
   for (std::size_t c = 0; c <= cells; ++c) starts[c + 1] += starts[c];
