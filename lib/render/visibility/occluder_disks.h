@@ -44,9 +44,6 @@ class OccluderDisks {
   /// into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
   std::size_t size() const { return count_; }
-  bool gridded() const { return grid_; }
-  /// Disk entries over all grid cells (each disk once per cell it reaches); 0 without grid.
-  std::size_t grid_entries() const { return grid_ ? cell_start_.back() : 0; }
 
   /// Grid cells per side over [-1, 1]^2 of the projection.
   static constexpr int kGridSide = 8;
