@@ -30,9 +30,8 @@ class BoundsPoint final : public PointVisibility {
   std::vector<std::size_t> shaft_instances_;  // the instances (other than the own) the light shaft meets
   bool traced_before_ = false;  // a proof failed here: the next segments go straight to the exact query
   bool proof_failed_ = false, proof_tried_ = false;
-  unsigned x_shells_ = 0;
+  ExactConnections connections_;
   std::vector<std::uint8_t> blocked_;
-  std::vector<unsigned> lanes_;
 };
 
 class BoundsVisibility final : public Visibility {
@@ -61,7 +60,7 @@ void BoundsPoint::begin(const ShadingPoint& point) {
   if (shaft_instances_.empty()) ++point.stats->shafts_culled;
   // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
   traced_before_ = shared_.proof_failures_[point.pixel] >= 2 && point.pass % 8 != 0;
-  x_shells_ = world.convex_shells_holding(point.position);
+  connections_.begin(world, point.position);
 }
 
 double BoundsPoint::to_light(const Vertex& end) {
@@ -107,29 +106,19 @@ double BoundsPoint::to_light(const Vertex& end) {
 }
 
 // The proofs of traced proxies need one end of the segment on a light: connections to
-// other points are traced exactly, as the exact strategy traces them (instances whose
-// convex shell holds both ends skipped, groups as packets).
+// other points are traced exactly, as the exact strategy traces them.
 double BoundsPoint::connection(const Vertex& end) {
-  const RenderWorld& world = shared_.context_.world;
   ++point_.stats->bounds_traced;
   ++point_.stats->exact_tests;
-  const unsigned cleared = x_shells_ & world.convex_shells_holding(end);
-  return world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = ~cleared & 0x7FFFFFFFu}) ? 0 : 1;
+  return connections_.blocked(end) ? 0 : 1;
 }
 
 void BoundsPoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
-  const RenderWorld& world = shared_.context_.world;
+  if (!shared_.context_.options.group_connections) return PointVisibility::connections(ends, end_shells, out);
   point_.stats->bounds_traced += ends.size();
   point_.stats->exact_tests += ends.size();
   blocked_.resize(ends.size());
-  lanes_.resize(ends.size());
-  for (std::size_t i = 0; i < ends.size(); ++i)
-    lanes_[i] = ~(x_shells_ & (end_shells.empty() ? world.convex_shells_holding(ends[i]) : end_shells[i]));
-  if (shared_.context_.options.group_connections) {
-    world.mesh_blocks(point_.position, ends, blocked_, {}, lanes_);
-  } else {
-    for (std::size_t i = 0; i < ends.size(); ++i) blocked_[i] = world.mesh_blocks(point_.position, ends[i], {.skip = -1, .only = -1, .bits = lanes_[i] & 0x7FFFFFFFu});
-  }
+  connections_.blocked(ends, end_shells, blocked_);
   for (std::size_t i = 0; i < ends.size(); ++i) out[i] = blocked_[i] ? 0 : 1;
 }
 

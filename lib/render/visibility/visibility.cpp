@@ -14,6 +14,24 @@ std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const
   return rest;
 }
 
+void ExactConnections::begin(const RenderWorld& world, const Vertex& from) {
+  world_ = &world;
+  from_ = from;
+  from_shells_ = world.convex_shells_holding(from);
+}
+
+bool ExactConnections::blocked(const Vertex& end) const {
+  const unsigned cleared = from_shells_ & world_->convex_shells_holding(end);
+  return world_->mesh_blocks(from_, end, {.skip = -1, .only = -1, .bits = ~cleared & 0x7FFFFFFFu});
+}
+
+void ExactConnections::blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked) {
+  lanes_.resize(ends.size());
+  for (std::size_t i = 0; i < ends.size(); ++i)
+    lanes_[i] = ~(from_shells_ & (end_shells.empty() ? world_->convex_shells_holding(ends[i]) : end_shells[i]));
+  world_->mesh_blocks(from_, ends, blocked, {}, lanes_);
+}
+
 RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts) {
   const RenderOptions& options = context.options;
   RayTypeCounts local;

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 #include <span>
+#include <vector>
 
 #include "render/render_world.h"
 #include "render/renderer.h"
@@ -84,6 +85,24 @@ std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const
 }  // namespace visproxy
 
 namespace visproxy {
+
+/// Connections traced exactly, as the exact strategy traces them (bounds traces its
+/// connections the same way, so that its image stays exact's): instances whose convex
+/// shell holds both ends are skipped (RenderWorld::convex_shells_holding); a group goes to
+/// Embree as packets.
+class ExactConnections {
+ public:
+  void begin(const RenderWorld& world, const Vertex& from);
+  bool blocked(const Vertex& end) const;
+  /// blocked[i] for ends[i]; `end_shells` as in PointVisibility::connections.
+  void blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked);
+
+ private:
+  const RenderWorld* world_ = nullptr;
+  Vertex from_ = Vertex::Zero();
+  unsigned from_shells_ = 0;
+  std::vector<unsigned> lanes_;
+};
 
 /// adaptive probabilities: the ray types seen by K probe segments from the point to the
 /// lights (rest of the scene: the own instance left out when splitting). With
