@@ -54,14 +54,14 @@ class ControlVariatePoint final : public PointVisibility {
   void learn(bool proxy_blocked, bool mesh_blocked);
   bool disks_in_use_ = false;
   OccluderDisks disks_;
-  InstanceFilter exact_part_, disk_part_;
+  ExactConnections exact_part_;  // traced exactly: the own instance when splitting, instances without sphere sets
+  InstanceFilter disk_part_;     // the instances the disks stand for
   bool any_exact_ = false;
-  unsigned x_shells_ = 0;
   // connections(): per end, the lanes' filters and answers (kept to reuse their memory)
   std::vector<Vertex> traced_ends_;
   std::vector<unsigned> traced_lanes_;
   std::vector<std::size_t> traced_index_;
-  std::vector<std::uint8_t> blocked_, hidden_;
+  std::vector<std::uint8_t> blocked_, hidden_, proxy_;
   std::vector<double> trace_probability_;
   ControlVariateVisibility& shared_;
   ShadingPoint point_;
@@ -76,10 +76,9 @@ class ControlVariateVisibility final : public Visibility {
         options_{.scale = context.options.correction_scale, .floor = context.options.probability_floor},
         pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0),
         pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0) {
-    for (std::size_t i = 0; i < context.scene.instances.size(); ++i) {
-      kinds_.push_back(context.world.stochastic_kind(context.options.split ? static_cast<int>(i) : -1));
+    kinds_ = stochastic_kinds(context);
+    for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
       disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
-    }
   }
   std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<ControlVariatePoint>(*this); }
 
@@ -112,27 +111,14 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   }
   disks_in_use_ = shared_.disks_;
   if (!disks_in_use_) return;
-  // Traced exactly: the own instance when splitting (unless it lies behind the tangent
-  // plane), and every instance without a sphere set. The disks stand for the others.
-  const RenderWorld& world = shared_.context_.world;
-  const int own = point.hit->instance;
-  disks_.reset(point.position, point.hit->normal);
-  unsigned exact_bits = 0, disk_bits = 0;
-  for (std::size_t i = 0; i < shared_.context_.scene.instances.size(); ++i) {
-    const bool is_own = static_cast<int>(i) == own;
-    const std::vector<Sphere>& balls = world.occluder_spheres(i);
-    if (balls.empty() || (is_own && options.split)) {
-      if (!(is_own && point.hit->own_mesh_behind)) exact_bits |= instance_bit(i);
-      continue;
-    }
-    disks_.add(balls, is_own && options.self_shadow == SelfShadow::heuristic);
-    disk_bits |= instance_bit(i);
-  }
-  disks_.finish(disks_.size() >= shared_.context_.options.disk_grid_from);
-  exact_part_ = {.skip = -1, .only = -1, .bits = exact_bits};
-  x_shells_ = world.convex_shells_holding(point.position);
-  disk_part_ = {.skip = -1, .only = -1, .bits = disk_bits};
-  any_exact_ = exact_bits != 0;
+  // Traced exactly: the own instance when splitting, and every instance without a sphere
+  // set. The disks stand for the others.
+  const DiskPartition partition =
+      prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
+                             options.split, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from);
+  exact_part_.begin(shared_.context_.world, point.position, partition.traced);
+  disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
+  any_exact_ = partition.traced != 0;
 }
 
 // A group of connections with disks as V': the same estimate per connection as
@@ -146,14 +132,13 @@ void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<co
   RenderStats& stats = *point_.stats;
   const std::size_t m = ends.size();
   const CorrectionProbabilities q = connection_corrections_;
-  auto shells = [&](std::size_t i) { return end_shells.empty() ? world.convex_shells_holding(ends[i]) : end_shells[i]; };
   // 1. The exactly traced part (own instance, instances without sphere sets), where no
   //    convex shell clears it.
   blocked_.assign(m, 0);
   if (any_exact_) {
     traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
     for (std::size_t i = 0; i < m; ++i) {
-      const unsigned lane = exact_part_.bits & ~(x_shells_ & shells(i));
+      const unsigned lane = exact_part_.lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]);
       if (lane != 0) traced_ends_.push_back(ends[i]), traced_lanes_.push_back(lane), traced_index_.push_back(i);
     }
     if (!traced_ends_.empty()) {
@@ -165,7 +150,8 @@ void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<co
     }
   }
   // 2. V' from the disks, all ends at once.
-  std::vector<std::uint8_t> proxy(m);
+  std::vector<std::uint8_t>& proxy = proxy_;
+  proxy.resize(m);
   disks_.occludes(ends, proxy, stats.disk_tests);
   // 3. The corrections each connection draws, traced as packets.
   traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
@@ -211,11 +197,10 @@ double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProba
   const double u = point_.choices->uniform();
   if (any_exact_) {
     // Instances whose convex shell holds both ends cannot block.
-    InstanceFilter exact = exact_part_;
-    exact.bits &= ~(x_shells_ & world.convex_shells_holding(end));
-    if (exact.bits != 0) {
+    const unsigned lane = exact_part_.lane(end);
+    if (lane != 0) {
       ++stats.exact_tests;
-      if (world.mesh_blocks(point_.position, end, exact)) return 0;
+      if (world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = lane})) return 0;
     }
   }
   ++stats.proxy_tests;

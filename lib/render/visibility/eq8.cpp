@@ -49,11 +49,7 @@ class TermChoicePoint final : public PointVisibility {
 class TermChoiceVisibility final : public Visibility {
  public:
   explicit TermChoiceVisibility(const VisibilityContext& context)
-      : context_(context), pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0) {
-    const std::size_t instances = context.scene.instances.size();
-    for (std::size_t i = 0; i < instances; ++i)
-      kinds_.push_back(context.world.stochastic_kind(context.options.split ? static_cast<int>(i) : -1));
-  }
+      : context_(context), kinds_(stochastic_kinds(context)), pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0) {}
   std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<TermChoicePoint>(*this); }
 
  private:

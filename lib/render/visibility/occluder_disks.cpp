@@ -236,6 +236,25 @@ bool disk_occludes_reference(const Vertex& x, const Sphere& ball, const Vertex& 
   return v.dot(w) / (t * z) > cos_gamma;
 }
 
+DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
+                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from) {
+  DiskPartition partition;
+  disks.reset(position, hit.normal);
+  for (std::size_t i = 0; i < instances; ++i) {
+    const bool is_own = static_cast<int>(i) == hit.instance;
+    const std::vector<Sphere>& balls = world.occluder_spheres(i);
+    if (balls.empty() || (is_own && trace_own)) {
+      // Traced exactly; the own instance needs no trace where it lies behind the tangent plane.
+      if (!(is_own && hit.own_mesh_behind)) partition.traced |= instance_bit(i);
+      continue;
+    }
+    disks.add(balls, is_own && own_heuristic);
+    partition.disks |= instance_bit(i);
+  }
+  disks.finish(disks.size() >= grid_from);
+  return partition;
+}
+
 namespace {
 
 class OccluderDiskVisibility;
@@ -252,14 +271,13 @@ class OccluderDiskPoint final : public PointVisibility {
   const OccluderDiskVisibility& shared_;
   ShadingPoint point_;
   OccluderDisks disks_;
-  InstanceFilter traced_;  // the instances traced exactly
+  ExactConnections traced_;  // the instances traced exactly
   bool any_traced_ = false;
   std::vector<Vertex> rest_;
   std::vector<std::size_t> rest_index_;
   std::vector<std::uint8_t> blocked_;
   std::vector<unsigned> lanes_;
   std::vector<std::uint8_t> hidden_;
-  unsigned x_shells_ = 0;
 };
 
 class OccluderDiskVisibility final : public Visibility {
@@ -274,52 +292,35 @@ class OccluderDiskVisibility final : public Visibility {
 
 void OccluderDiskPoint::begin(const ShadingPoint& point) {
   point_ = point;
-  const RenderWorld& world = shared_.context_.world;
-  const SelfShadow self = shared_.context_.options.self_shadow;
-  const int own = point.hit->instance;
-  disks_.reset(point.position, point.hit->normal);
-  unsigned bits = 0;
-  for (std::size_t i = 0; i < shared_.context_.scene.instances.size(); ++i) {
-    const std::vector<Sphere>& balls = world.occluder_spheres(i);
-    const bool is_own = static_cast<int>(i) == own;
-    if (balls.empty() || (is_own && self == SelfShadow::exact)) {
-      // Traced exactly; the own instance needs no trace where it lies behind the tangent plane.
-      if (!(is_own && point.hit->own_mesh_behind)) bits |= instance_bit(i);
-      continue;
-    }
-    disks_.add(balls, is_own && self == SelfShadow::heuristic);
-  }
-  disks_.finish(disks_.size() >= shared_.context_.options.disk_grid_from);
-  traced_ = InstanceFilter{.skip = -1, .only = -1, .bits = bits};
-  any_traced_ = bits != 0;
-  x_shells_ = world.convex_shells_holding(point.position);
+  const RenderOptions& options = shared_.context_.options;
+  const DiskPartition partition =
+      prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
+                             options.self_shadow == SelfShadow::exact, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from);
+  traced_.begin(shared_.context_.world, point.position, partition.traced);
+  any_traced_ = partition.traced != 0;
 }
 
 double OccluderDiskPoint::connection(const Vertex& end) {
   RenderStats& stats = *point_.stats;
   ++stats.proxy_tests;
   if (disks_.occludes(end, stats.disk_tests)) return 0;
-  // Traced instances whose convex shell holds both ends cannot block.
-  InstanceFilter traced = traced_;
-  traced.bits &= ~(x_shells_ & shared_.context_.world.convex_shells_holding(end));
-  if (traced.bits == 0) return 1;
+  const unsigned lane = traced_.lane(end);
+  if (lane == 0) return 1;
   ++stats.exact_tests;
-  return shared_.context_.world.mesh_blocks(point_.position, end, traced) ? 0 : 1;
+  return shared_.context_.world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = lane}) ? 0 : 1;
 }
 
 void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
   RenderStats& stats = *point_.stats;
-  rest_.clear(), rest_index_.clear();
+  rest_.clear(), rest_index_.clear(), lanes_.clear();
   stats.proxy_tests += ends.size();
-  lanes_.clear();
   const RenderWorld& world = shared_.context_.world;
   hidden_.resize(ends.size());
   disks_.occludes(ends, hidden_, stats.disk_tests);
   for (std::size_t i = 0; i < ends.size(); ++i) {
     out[i] = hidden_[i] ? 0 : 1;
     if (out[i] == 0 || !any_traced_) continue;
-    // Traced instances whose convex shell holds both ends cannot block.
-    const unsigned lane = traced_.bits & ~(x_shells_ & (end_shells.empty() ? world.convex_shells_holding(ends[i]) : end_shells[i]));
+    const unsigned lane = traced_.lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]);
     if (lane == 0) continue;
     rest_.push_back(ends[i]), rest_index_.push_back(i), lanes_.push_back(lane);
   }
@@ -327,7 +328,7 @@ void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<cons
   stats.exact_tests += rest_.size();
   blocked_.resize(rest_.size());
   if (shared_.context_.options.group_connections) {
-    world.mesh_blocks(point_.position, rest_, blocked_, traced_, lanes_);
+    world.mesh_blocks(point_.position, rest_, blocked_, {}, lanes_);
   } else {
     for (std::size_t k = 0; k < rest_.size(); ++k)
       blocked_[k] = world.mesh_blocks(point_.position, rest_[k], {.skip = -1, .only = -1, .bits = lanes_[k]});

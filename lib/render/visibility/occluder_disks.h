@@ -65,6 +65,18 @@ class OccluderDisks {
   std::vector<std::size_t> cell_start_;  // kGridSide^2 + 1 offsets into cells_
 };
 
+/// Which instances a shading point's occluder disks stand for. Prepares `disks` at
+/// `position` (moved off `hit`) with the balls of every instance that has a sphere set,
+/// except the own instance when `trace_own` (its balls with t < 2R skipped when
+/// `own_heuristic`), sorted into the grid when there are at least `grid_from`. `traced`:
+/// the instances to trace exactly instead (those without a sphere set, and the own one when
+/// `trace_own`, unless its mesh lies behind the tangent plane); `disks`: the others.
+struct DiskPartition {
+  unsigned traced = 0, disks = 0;  ///< instance_bit()s
+};
+DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
+                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from);
+
 /// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
 /// segment to w = (wx, wy, wz) at distance z = |w|: w . u_j > cos_j z (cos delta > cos
 /// gamma) and t_j < z. Vectorised across disks, blocks of 16 at a time, with AVX2 where

@@ -14,22 +14,32 @@ std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const
   return rest;
 }
 
-void ExactConnections::begin(const RenderWorld& world, const Vertex& from) {
+void ExactConnections::begin(const RenderWorld& world, const Vertex& from, unsigned bits) {
   world_ = &world;
   from_ = from;
+  bits_ = bits;
   from_shells_ = world.convex_shells_holding(from);
 }
 
+unsigned ExactConnections::lane(const Vertex& end, const unsigned* end_shells) const {
+  return bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
+}
+
 bool ExactConnections::blocked(const Vertex& end) const {
-  const unsigned cleared = from_shells_ & world_->convex_shells_holding(end);
-  return world_->mesh_blocks(from_, end, {.skip = -1, .only = -1, .bits = ~cleared & 0x7FFFFFFFu});
+  return world_->mesh_blocks(from_, end, {.skip = -1, .only = -1, .bits = lane(end)});
 }
 
 void ExactConnections::blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked) {
   lanes_.resize(ends.size());
-  for (std::size_t i = 0; i < ends.size(); ++i)
-    lanes_[i] = ~(from_shells_ & (end_shells.empty() ? world_->convex_shells_holding(ends[i]) : end_shells[i]));
+  for (std::size_t i = 0; i < ends.size(); ++i) lanes_[i] = lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]);
   world_->mesh_blocks(from_, ends, blocked, {}, lanes_);
+}
+
+std::vector<ProxyKind> stochastic_kinds(const VisibilityContext& context) {
+  std::vector<ProxyKind> kinds;
+  for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
+    kinds.push_back(context.world.stochastic_kind(context.options.split ? static_cast<int>(i) : -1));
+  return kinds;
 }
 
 RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts) {

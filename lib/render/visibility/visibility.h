@@ -92,7 +92,12 @@ namespace visproxy {
 /// Embree as packets.
 class ExactConnections {
  public:
-  void begin(const RenderWorld& world, const Vertex& from);
+  /// Segments from `from` against the instances of `bits` (instance_bit()s; all by default).
+  void begin(const RenderWorld& world, const Vertex& from, unsigned bits = 0x7FFFFFFFu);
+  /// The instances a segment to `end` must still be traced against: those of `bits` whose
+  /// convex shell does not hold both ends. `end_shells`, if known, is
+  /// convex_shells_holding(end).
+  unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const;
   bool blocked(const Vertex& end) const;
   /// blocked[i] for ends[i]; `end_shells` as in PointVisibility::connections.
   void blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked);
@@ -100,9 +105,13 @@ class ExactConnections {
  private:
   const RenderWorld* world_ = nullptr;
   Vertex from_ = Vertex::Zero();
-  unsigned from_shells_ = 0;
+  unsigned bits_ = 0x7FFFFFFFu, from_shells_ = 0;
   std::vector<unsigned> lanes_;
 };
+
+/// Per instance: the kind of the rest of the scene's stochastic proxies that its shading
+/// points see (RenderWorld::stochastic_kind, the own instance left out when splitting).
+std::vector<ProxyKind> stochastic_kinds(const VisibilityContext& context);
 
 /// adaptive probabilities: the ray types seen by K probe segments from the point to the
 /// lights (rest of the scene: the own instance left out when splitting). With
