@@ -351,3 +351,64 @@ TEST(RenderWorld, FilterFunctionsGiveTheImagesOfRayMasks) {
 
 }  // namespace
 }  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+// Convex shells, the proof that lets VPL connections skip rooms and walls, on inputs built
+// to break it: an open room (five walls: the open side must not be treated as a wall, and
+// a segment through a wall must not be skipped), an L-shaped box that is not convex (no
+// shell), a reflecting, non-uniform transform, points within the margin of a wall, and
+// 20 000 random segments whose ends the shell holds, which the mesh must never block.
+TEST(RenderWorld, ConvexShellsHoldOnlyWhatTheirMeshCannotBlock) {
+  TriangleMesh room = box({-1, 0, -1}, {1, 2, 1});
+  // Drop the two triangles of the face z = 1 (the open side).
+  std::vector<Triangle> walls;
+  for (const Triangle& t : room.triangles)
+    if (!(room.positions[t[0]].z() == 1 && room.positions[t[1]].z() == 1 && room.positions[t[2]].z() == 1)) walls.push_back(t);
+  ASSERT_EQ(walls.size(), 10u);
+  room.triangles = walls;
+  TriangleMesh ell = joined(box({0, 0, 0}, {2, 1, 1}), box({0, 1, 0}, {1, 2, 1}));  // not convex
+  Scene scene;
+  scene.meshes.push_back({"room", {}, room, {}});
+  scene.meshes.push_back({"ell", {}, ell, {}});
+  Eigen::Affine3d mirrored = Eigen::Affine3d::Identity();
+  mirrored.translate(Vertex(10, 0, 0)).scale(Vertex(-1.5, 0.5, 2));  // reflects x, stretches y and z
+  scene.instances.push_back({"room", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.instances.push_back({"room", mirrored, Color::Constant(0.5), {}});
+  Eigen::Affine3d far_away = Eigen::Affine3d::Identity();
+  far_away.translate(Vertex(0, 0, 20));
+  scene.instances.push_back({"ell", far_away, Color::Constant(0.5), {}});
+  scene.lights.push_back(downward_light({0, 1.9, 0}, 0.2));
+  const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
+  const unsigned first = instance_bit(0), second = instance_bit(1), ell_bit = instance_bit(2);
+
+  EXPECT_EQ(world.convex_shells_holding({0, 1, 0}) & first, first);     // inside the room
+  EXPECT_EQ(world.convex_shells_holding({0, 1, 5}) & first, first);     // beyond the open side: no wall there
+  EXPECT_EQ(world.convex_shells_holding({0, 1, -1.5}) & first, 0u);     // behind the back wall
+  EXPECT_EQ(world.convex_shells_holding({0, 2 - 1e-13, 0}) & first, 0u);  // within the margin of the ceiling
+  EXPECT_EQ(world.convex_shells_holding({10, 0.5, 0}) & second, second);  // inside the mirrored room
+  EXPECT_EQ(world.convex_shells_holding({10, 0.5, 0}) & first, 0u);
+  EXPECT_EQ(world.convex_shells_holding({10, 1.5, 0}) & second, 0u);     // above its squashed ceiling (y = 1)
+  for (const Vertex& p : {Vertex(0.5, 0.5, 20.5), Vertex(1.5, 0.5, 20.5), Vertex(5, 5, 25)})
+    EXPECT_EQ(world.convex_shells_holding(p) & ell_bit, 0u);  // the L shape has no shell
+  // A segment from inside the room through a wall is not skipped: one end is not held.
+  EXPECT_TRUE(world.mesh_blocks({0, 1, 0}, {0, 1, -1.5}, {.skip = -1, .only = 0}));
+
+  // Segments between held points, near the walls and through the open side: never blocked.
+  Random random(8);
+  int held_pairs = 0;
+  for (int i = 0; i < 20000; ++i) {
+    auto point = [&] {
+      return Vertex(2.2 * random.uniform() - 1.1, 2.2 * random.uniform() - 0.1, 3 * random.uniform() - 1.1);
+    };
+    const Vertex a = point(), b = point();
+    if ((world.convex_shells_holding(a) & world.convex_shells_holding(b) & first) == 0) continue;
+    ++held_pairs;
+    ASSERT_FALSE(world.mesh_blocks(a, b, {.skip = -1, .only = 0})) << a.transpose() << " -> " << b.transpose();
+  }
+  EXPECT_GT(held_pairs, 5000);
+}
+
+}  // namespace
+}  // namespace visproxy
