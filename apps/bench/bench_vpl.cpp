@@ -8,8 +8,9 @@
 //  - self-shadowing at one level: heuristic, exact and none;
 //  - the control variate with the sphere sets as V' (learned probabilities): time, MSE
 //    against the reference, efficiency 1 / (MSE x time) over exact's;
-//  - occluder disks compared one block after another against the direction grid, per
-//    level: the crossover (paper: about 800 spheres for its k-d tree);
+//  - occluder disks compared every ball with every connection (linear), against the bounds
+//    of clusters of balls first (the default) and against the direction grid, per level:
+//    where a structure pays (paper: its k-d tree broke even at about 800 spheres);
 //  - the disk loop vectorised against scalar code.
 // Every mode renders the same VPLs (--vpl-seed), so clamping cancels out of the errors.
 //   visproxy-bench-vpl SCENE [--levels 1000,250,100,25,10] [--spp N] [--reference-spp R]
@@ -159,7 +160,7 @@ int run(int argc, char** argv) {
   const RenderResult grouped_result = render(scene, exact_world, base), single_result = render(scene, exact_world, single);
   const double connections = static_cast<double>(grouped_result.stats.vpl_connections + grouped_result.stats.shadow_rays);
   const double exact_seconds = grouped_result.stats.seconds, exact_mse = mse(grouped_result.image, reference.image);
-  const bool identical = grouped_result.image.pixels == single_result.image.pixels;
+  bool identical = grouped_result.image.pixels == single_result.image.pixels;
   std::printf("\nExact connections (2 threads), packets of %d against single rays:\n\n", exact_world.packet_width());
   std::printf("| exact | s | million segments / s | ratio |\n| --- | ---: | ---: | ---: |\n");
   std::printf("| single rays | %.2f | %.2f | 1.00 |\n", single_result.stats.seconds, connections / single_result.stats.seconds / 1e6);
@@ -173,7 +174,11 @@ int run(int argc, char** argv) {
     double seconds, mse_exact_image, mse_reference;
   };
   std::vector<Row> rows = {{"exact", exact_seconds, 0, exact_mse}};
-  std::vector<std::pair<int, std::pair<double, double>>> crossover;  // level -> (linear s, grid s)
+  struct Crossover {
+    int level;
+    double linear, clusters, grid;  // seconds
+  };
+  std::vector<Crossover> crossover;
   std::vector<Row> control_variates;
   for (const int level : levels) {
     const std::string spec = "spheres:" + std::to_string(level);
@@ -185,13 +190,18 @@ int run(int argc, char** argv) {
     const RenderResult s = render(scene, world, spheres);
     rows.push_back({spec + " occluder disks", s.stats.seconds, mse(s.image, grouped_result.image), mse(s.image, reference.image)});
     if (!images.empty()) write_png(images / ("spheres-" + std::to_string(level) + ".png"), s.image);
-    // Linear against the grid: the same image, two timings.
+    // Every ball against every connection, the clusters' bounds first (the render above),
+    // and the grid: the same image, three timings.
     RenderOptions linear = spheres, grid = spheres;
     linear.disk_grid_from = static_cast<std::size_t>(-1);
+    linear.disk_clusters = false;
     grid.disk_grid_from = 0;
     const RenderResult l = render(scene, world, linear), g = render(scene, world, grid);
-    if (l.image.pixels != g.image.pixels) std::printf("  %s: linear and grid images DIFFER\n", spec.c_str());
-    crossover.push_back({level, {l.stats.seconds, g.stats.seconds}});
+    if (l.image.pixels != s.image.pixels || g.image.pixels != s.image.pixels) {
+      std::printf("  %s: linear, clustered and grid images DIFFER\n", spec.c_str());
+      identical = false;
+    }
+    crossover.push_back({level, l.stats.seconds, s.stats.seconds, g.stats.seconds});
     if (level == levels.back() || level == 100) {
       for (const SelfShadow self : {SelfShadow::none, SelfShadow::exact}) {
         RenderOptions o = spheres;
@@ -233,11 +243,13 @@ int run(int argc, char** argv) {
   for (const Row& r : control_variates) print(r);
   std::printf("\n(efficiency: 1 / (MSE against the reference x time); exact's MSE is its own noise, %.3g)\n", exact_mse);
 
-  std::printf("\nOccluder disks compared one block after another (linear) against the direction grid, spheres visibility:\n\n");
-  std::printf("| spheres | linear s | grid s | linear / grid |\n| ---: | ---: | ---: | ---: |\n");
-  std::sort(crossover.begin(), crossover.end());
-  for (const auto& [level, times] : crossover)
-    std::printf("| %d | %.2f | %.2f | %.2f |\n", level, times.first, times.second, times.first / times.second);
+  std::printf("\nOccluder disks, spheres visibility (whole renders): every ball against every connection (linear), the bounds of "
+              "clusters of balls first (default), and the direction grid; same images:\n\n");
+  std::printf("| spheres | linear s | clusters s | grid s | linear / clusters | linear / grid |\n| ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  std::sort(crossover.begin(), crossover.end(), [](const Crossover& a, const Crossover& b) { return a.level < b.level; });
+  for (const Crossover& c : crossover)
+    std::printf("| %d | %.2f | %.2f | %.2f | %.2f | %.2f |\n", c.level, c.linear, c.clusters, c.grid, c.linear / c.clusters,
+                c.linear / c.grid);
   disk_loop_benchmark();
   return identical ? 0 : 1;
 }

@@ -29,6 +29,7 @@ struct RenderCommandOptions {
   SelfShadow self_shadow = SelfShadow::heuristic;
   bool single_rays = false;
   std::size_t disk_grid_from = 4096;
+  bool no_disk_clusters = false;
   ProbabilityMode probabilities = ProbabilityMode::equal;
   StochasticEstimator estimator = StochasticEstimator::term_choice;
   int probe_passes = 0;
@@ -100,6 +101,9 @@ void add_render_command(CLI::App& app, int& exit_code) {
   command->add_option("--disk-grid-from", o->disk_grid_from,
                       "Occluder disks: sort a shading point's disks into a grid over the directions when it has at least this "
                       "many (0: always) [default: 4096]");
+  command->add_flag("--no-disk-clusters", o->no_disk_clusters,
+                    "Occluder disks: compare every ball with every connection, instead of first the bound of each cluster of "
+                    "an instance's balls (same answers, for timing)");
   command->add_flag("--single-rays", o->single_rays, "vpl: trace the connections of a shading point one ray at a time, not as packets");
   const std::map<std::string, ProbabilityMode> probability_modes{
       {"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}};
@@ -197,6 +201,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
                           .group_connections = !o->single_rays,
                           .self_shadow = o->self_shadow,
                           .disk_grid_from = o->disk_grid_from,
+                          .disk_clusters = !o->no_disk_clusters,
                           .seconds = o->seconds,
                           .on_pass = nullptr};
     if (terminal)

@@ -4,6 +4,7 @@
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "core/errors.h"
@@ -138,6 +139,50 @@ TriangleMesh sphere_union_boundary_mesh(const std::vector<Sphere>& spheres, int 
   for (const Triangle& t : all.triangles)
     if (!(buried[t[0]] && buried[t[1]] && buried[t[2]])) boundary.triangles.push_back(t);
   return boundary;
+}
+
+namespace {
+
+void split_spheres(std::vector<Sphere>& spheres, std::size_t begin, std::size_t end, std::size_t leaf, std::vector<SphereCluster>& out) {
+  if (end - begin <= leaf) {
+    Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
+    for (std::size_t i = begin; i < end; ++i) {
+      low = low.cwiseMin(spheres[i].center - Vertex::Constant(spheres[i].radius));
+      high = high.cwiseMax(spheres[i].center + Vertex::Constant(spheres[i].radius));
+    }
+    const Vertex centre = 0.5 * (low + high);
+    double radius = 0, magnitude = centre.cwiseAbs().maxCoeff();
+    for (std::size_t i = begin; i < end; ++i) {
+      radius = std::max(radius, (spheres[i].center - centre).norm() + spheres[i].radius);
+      magnitude = std::max(magnitude, spheres[i].center.cwiseAbs().maxCoeff() + spheres[i].radius);
+    }
+    out.push_back({{centre, radius + std::ldexp(magnitude, -40)}, static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)});
+    return;
+  }
+  Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (std::size_t i = begin; i < end; ++i) low = low.cwiseMin(spheres[i].center), high = high.cwiseMax(spheres[i].center);
+  Eigen::Index axis = 0;
+  (high - low).maxCoeff(&axis);
+  const std::size_t middle = begin + (end - begin) / 2;
+  // Ties broken by the other coordinates and the radius, so that the order is deterministic.
+  std::nth_element(spheres.begin() + static_cast<std::ptrdiff_t>(begin), spheres.begin() + static_cast<std::ptrdiff_t>(middle),
+                   spheres.begin() + static_cast<std::ptrdiff_t>(end), [axis](const Sphere& a, const Sphere& b) {
+                     const auto key = [axis](const Sphere& s) {
+                       return std::array<double, 4>{s.center[axis], s.center[(axis + 1) % 3], s.center[(axis + 2) % 3], s.radius};
+                     };
+                     return key(a) < key(b);
+                   });
+  split_spheres(spheres, begin, middle, leaf, out);
+  split_spheres(spheres, middle, end, leaf, out);
+}
+
+}  // namespace
+
+std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::size_t leaf) {
+  std::vector<SphereCluster> clusters;
+  if (spheres.empty()) return clusters;
+  split_spheres(spheres, 0, spheres.size(), std::max<std::size_t>(leaf, 1), clusters);
+  return clusters;
 }
 
 }  // namespace visproxy

@@ -170,6 +170,7 @@ struct RenderWorld::Impl {
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
   std::vector<std::string> notes;
   std::vector<std::vector<Sphere>> occluder_spheres;  // per instance, world space
+  std::vector<std::vector<SphereCluster>> occluder_clusters;  // per instance, over occluder_spheres
   // Instances whose mesh lies on its convex hull's boundary: the hull's planes (outward
   // normal, offset) in world space, and the margin a point must keep inside them.
   struct ConvexShell {
@@ -619,6 +620,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     std::vector<Sphere> occluders;
     if (p.stochastic)
       for (const Sphere& ball : p.stochastic->spheres) occluders.push_back({instance.transform * ball.center, ball.radius * scales(0)});
+    w.occluder_clusters.push_back(cluster_spheres(occluders, occluder_cluster_size(occluders.size())));
     w.occluder_spheres.push_back(std::move(occluders));
     w.stochastic_kinds.push_back(kind);
 
@@ -751,6 +753,15 @@ unsigned RenderWorld::convex_shells_holding(const Vertex& point) const {
 }
 int RenderWorld::packet_width() const { return impl_->counting ? 1 : impl_->packet; }
 const std::vector<Sphere>& RenderWorld::occluder_spheres(std::size_t instance) const { return impl_->occluder_spheres[instance]; }
+
+const std::vector<SphereCluster>& RenderWorld::occluder_clusters(std::size_t instance) const {
+  return impl_->occluder_clusters[instance];
+}
+
+std::size_t occluder_cluster_size(std::size_t spheres) {
+  const auto root = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(spheres))));
+  return std::max<std::size_t>(32, (root + 7) / 8 * 8);
+}
 
 bool RenderWorld::proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->proxy, from, to, filter);

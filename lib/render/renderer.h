@@ -73,6 +73,9 @@ struct RenderOptions {
   /// shading point's disks into a grid over the directions (OccluderDisks::finish) when it
   /// has at least this many; fewer are compared one block after another.
   std::size_t disk_grid_from = 4096;
+  /// Occluder disks: test the bound of each cluster of an instance's balls
+  /// (RenderWorld::occluder_clusters) before its balls; same answers, fewer comparisons.
+  bool disk_clusters = true;
   double seconds = 0;              ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;

@@ -48,4 +48,16 @@ struct VplGeometry {
 };
 VplGeometry vpl_geometry(const Vertex& x, const Vertex& n, const VirtualPointLight& light);
 
+/// The lights' positions and normals in structure-of-arrays form, for the batched
+/// vpl_geometry() below.
+struct VplArrays {
+  std::vector<double> px, py, pz, nx, ny, nz;
+  explicit VplArrays(const std::vector<VirtualPointLight>& lights);
+  std::size_t size() const { return px.size(); }
+};
+/// vpl_geometry() for every light at once: faces[i] (-1 where the connection faces both
+/// surfaces, else 0) and geometric[i] (0 where it does not face) for light i; the same
+/// arithmetic as the single form, vectorised across the lights.
+void vpl_geometry(const Vertex& x, const Vertex& n, const VplArrays& lights, double* geometric, std::int64_t* faces);
+
 }  // namespace visproxy

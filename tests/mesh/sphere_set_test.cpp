@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <numbers>
 
 #include "core/errors.h"
+#include "core/random.h"
 #include "core/files.h"
 #include "mesh/mesh_topology.h"
 #include "test_support.h"
@@ -100,6 +103,49 @@ TEST(SphereUnionBoundaryMesh, DropsTrianglesBuriedInOtherBalls) {
   EXPECT_EQ(from_small, 0u);  // the buried ball leaves nothing
   // Each big ball keeps the part of its surface outside the other: most of it.
   EXPECT_GT(boundary.triangles.size(), all.triangles.size() / 2);
+}
+
+// Clusters partition the set into runs of at most `leaf`, each bound holds its balls (also
+// far from the origin, with equal balls and with balls of radius 0), and the order is the
+// same on every call.
+TEST(ClusterSpheres, PartitionsTheSetAndBoundsHoldTheirBalls) {
+  Random random(77);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double far = trial % 2 == 0 ? 1e7 : 0;
+    std::vector<Sphere> balls;
+    const int count = static_cast<int>(random.below(300));
+    for (int b = 0; b < count; ++b) {
+      const Vertex c = Vertex::Constant(far) + Vertex(random.uniform(), random.uniform(), random.uniform()) * 10;
+      balls.push_back({trial % 5 == 0 ? Vertex::Constant(far) : c, trial % 7 == 0 ? 0.0 : random.uniform()});
+    }
+    const std::size_t leaf = 1 + random.below(40);
+    std::vector<Sphere> ordered = balls, again = balls;
+    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf);
+    EXPECT_EQ(cluster_spheres(again, leaf).size(), clusters.size());
+    EXPECT_EQ(again, ordered);
+    std::uint32_t next = 0;
+    for (const SphereCluster& cluster : clusters) {
+      EXPECT_EQ(cluster.begin, next);
+      EXPECT_GT(cluster.end, cluster.begin);
+      EXPECT_LE(cluster.end - cluster.begin, leaf);
+      next = cluster.end;
+      for (std::uint32_t i = cluster.begin; i < cluster.end; ++i) {
+        // Checked in long double, finer than the double the bound was computed in.
+        const auto d = [](double a, double b) { return static_cast<long double>(a) - static_cast<long double>(b); };
+        const Vertex& c = ordered[i].center;
+        const long double dx = d(c.x(), cluster.bound.center.x()), dy = d(c.y(), cluster.bound.center.y()),
+                          dz = d(c.z(), cluster.bound.center.z());
+        EXPECT_LE(std::sqrt(dx * dx + dy * dy + dz * dz) + ordered[i].radius, static_cast<long double>(cluster.bound.radius));
+      }
+    }
+    EXPECT_EQ(next, ordered.size());
+    // The same balls, reordered.
+    auto less = [](const Sphere& a, const Sphere& b) {
+      return std::tie(a.center.x(), a.center.y(), a.center.z(), a.radius) < std::tie(b.center.x(), b.center.y(), b.center.z(), b.radius);
+    };
+    std::sort(balls.begin(), balls.end(), less), std::sort(ordered.begin(), ordered.end(), less);
+    EXPECT_EQ(balls, ordered);
+  }
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "core/random.h"
+#include "mesh/sphere_set.h"
 #include "render/visibility/occluder_disks.h"
 #include "trace/embree_support.h"
 
@@ -193,6 +194,86 @@ TEST(OccluderDisks, EdgeCases) {
   EXPECT_EQ(disks.size(), 1u);
   EXPECT_TRUE(disks.occludes({0, 0, 2}, tests));
   EXPECT_FALSE(disks.occludes({0, 0, 0.85}, tests));  // the light before the kept ball's centre
+}
+
+// The clusters' bounds only skip work: with them, every segment gets the answer of testing
+// every disk, one at a time and in groups. The balls are made to defeat a careless bound:
+// balls touching the inside of their cluster's bound (so that their cones touch the bound's
+// cone), ends aimed within 1e-6 radians of those balls' silhouettes, points inside a bound
+// and inside a ball, the self-shadowing heuristic, and everything 10^4 units from the origin.
+TEST(OccluderDisks, ClustersGiveTheAnswersOfEveryDisk) {
+  Random random(4242);
+  std::uint64_t checks = 0, occluded = 0, flat_tests = 0, clustered_tests = 0, grazing = 0;
+  std::size_t most_groups = 0;
+  for (int p = 0; p < 1500; ++p) {
+    const Vertex offset = (p % 3 == 0) ? Vertex(1e4, -1e4, 1e4) : Vertex::Zero();
+    const Vertex x = offset + Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5);
+    const Vertex n = random_unit(random);
+    std::vector<Sphere> balls;
+    const int shells = 1 + static_cast<int>(random.below(6));
+    for (int s = 0; s < shells; ++s) {
+      // A shell: balls inside a sphere (C, R), a third of them touching it from inside.
+      const Vertex centre = offset + 3 * random.uniform() * random_unit(random);
+      const double big = 0.1 + 0.6 * random.uniform();
+      const int count = 2 + static_cast<int>(random.below(40));
+      for (int b = 0; b < count; ++b) {
+        const double r = big * (0.05 + 0.4 * random.uniform());
+        const double reach = (b % 3 == 0) ? big - r : (big - r) * random.uniform();
+        balls.push_back({centre + reach * random_unit(random), r});
+      }
+    }
+    if (p % 7 == 0) balls.push_back({x + 0.01 * random_unit(random), 0.05});  // holds x
+    const bool heuristic = p % 4 == 1;
+    const std::size_t leaf = 1 + random.below(24);
+    std::vector<Sphere> ordered = balls;
+    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf);
+    OccluderDisks flat, clustered;
+    flat.reset(x, n), clustered.reset(x, n);
+    flat.add(balls, heuristic), clustered.add(ordered, clusters, heuristic);
+    flat.finish(), clustered.finish();
+    ASSERT_EQ(flat.size(), clustered.size()) << "point " << p;
+    most_groups = std::max(most_groups, clustered.groups());
+    std::vector<Vertex> ends;
+    std::vector<std::uint8_t> answers;
+    for (int e = 0; e < 96; ++e) {
+      Vertex direction = random_unit(random);
+      double length = 0.1 + 6 * random.uniform();
+      if (e % 2 == 0) {
+        // Along a ball's silhouette, jittered by up to 1e-6 radians, beyond the ball.
+        const Sphere& ball = balls[random.below(balls.size())];
+        const Vertex v = ball.center - x;
+        const double t = v.norm();
+        if (t > ball.radius) {
+          const Vertex u = v / t;
+          Vertex side = random_unit(random);
+          side = (side - side.dot(u) * u).normalized();
+          const double gamma = std::asin(ball.radius / t) + 1e-6 * (2 * random.uniform() - 1);
+          direction = std::cos(gamma) * u + std::sin(gamma) * side;
+          length = t + ball.radius * (0.5 + 2 * random.uniform());
+          ++grazing;
+        }
+      }
+      if (direction.dot(n) < 0 && e % 8 != 1) direction -= 2 * direction.dot(n) * n;
+      ends.push_back(x + length * direction);
+      const bool answer = flat.occludes(ends.back(), flat_tests);
+      ASSERT_EQ(clustered.occludes(ends.back(), clustered_tests), answer) << "point " << p << " end " << e;
+      answers.push_back(answer ? 1 : 0);
+      occluded += answer ? 1 : 0;
+      ++checks;
+    }
+    std::vector<std::uint8_t> flat_group(ends.size()), clustered_group(ends.size());
+    std::uint64_t group_tests = 0;
+    flat.occludes(ends, flat_group, group_tests);
+    clustered.occludes(ends, clustered_group, group_tests);
+    ASSERT_EQ(flat_group, answers) << "point " << p;
+    ASSERT_EQ(clustered_group, answers) << "point " << p;
+  }
+  EXPECT_GT(occluded, checks / 5);
+  EXPECT_LT(occluded, checks * 4 / 5);
+  EXPECT_GT(grazing, checks / 3);
+  EXPECT_GE(most_groups, 10u);
+  // The bounds reject: fewer comparisons than testing every disk.
+  EXPECT_LT(clustered_tests, flat_tests * 3 / 4);
 }
 
 }  // namespace

@@ -104,6 +104,36 @@ TEST(VirtualPointLights, LaterBouncesCarryTheAlbedoOfTheSurfacesLeft) {
   EXPECT_EQ(second, 500);
 }
 
+// The batched geometric term is the single one, bit for bit, light by light: the same
+// facing answer and the same G, also for lights exactly in the shading point's tangent
+// plane, behind it, facing away, and at the shading point itself (which faces nothing).
+TEST(VirtualPointLights, BatchedGeometryIsTheSingleOne) {
+  Random random(5);
+  std::vector<VirtualPointLight> lights;
+  const Vertex x(0.25, -0.5, 1e3), n = Vertex(0.3, -0.4, 1).normalized();
+  for (int i = 0; i < 2000; ++i) {
+    VirtualPointLight light{.position = Vertex::Zero(), .normal = Vertex::UnitZ(), .power = Color::Ones(), .brdf = Color::Ones()};
+    const Vertex d(2 * random.uniform() - 1, 2 * random.uniform() - 1, 2 * random.uniform() - 1);
+    light.position = x + (i % 10 == 0 ? d - d.dot(n) * n : d) * (i % 3 == 0 ? 1e-3 : 1.0);
+    if (i % 97 == 0) light.position = x;
+    light.normal = Vertex(2 * random.uniform() - 1, 2 * random.uniform() - 1, 2 * random.uniform() - 1).normalized();
+    lights.push_back(light);
+  }
+  const VplArrays arrays(lights);
+  std::vector<double> geometric(lights.size());
+  std::vector<std::int64_t> faces(lights.size());
+  vpl_geometry(x, n, arrays, geometric.data(), faces.data());
+  int facing = 0;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const VplGeometry single = vpl_geometry(x, n, lights[i]);
+    ASSERT_EQ(faces[i] != 0, single.faces) << i;
+    ASSERT_EQ(geometric[i], single.faces ? single.geometric : 0.0) << i;
+    facing += single.faces ? 1 : 0;
+  }
+  EXPECT_GT(facing, 200);
+  EXPECT_LT(facing, 800);
+}
+
 // A point light over a plane: one given VPL at (-2, 0, 0.5) facing (1, 0, -1) / sqrt 2, no
 // area light. The plane's radiance is albedo/pi x power x brdf x cos_x cos_v / d^2; a wall
 // at x = -1 (y < 0, outside the camera's view) shadows exactly the half y < 0 of the

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "render/integrators/integrator.h"
@@ -13,6 +15,40 @@ namespace visproxy {
 namespace {
 
 double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
+
+// Orders the lights along a Morton curve over their bounding box (ties kept in order), so
+// that neighbours in the list lie near each other: a shading point's connections to a run
+// of them leave in similar directions, which lets occluder disks reject clusters for whole
+// chunks of connections at once. Only the order of a sum changes.
+void sort_spatially(std::vector<VirtualPointLight>& lights) {
+  if (lights.size() < 2) return;
+  BoundingBox box;
+  for (const VirtualPointLight& light : lights) box.extend(light.position);
+  const Vertex extent = (box.max - box.min).cwiseMax(Vertex::Constant(std::numeric_limits<double>::min()));
+  auto spread = [](std::uint64_t v) {  // 21 bits to every third of 63
+    v &= 0x1FFFFF;
+    v = (v | v << 32) & 0x1F00000000FFFF;
+    v = (v | v << 16) & 0x1F0000FF0000FF;
+    v = (v | v << 8) & 0x100F00F00F00F00F;
+    v = (v | v << 4) & 0x10C30C30C30C30C3;
+    v = (v | v << 2) & 0x1249249249249249;
+    return v;
+  };
+  std::vector<std::pair<std::uint64_t, std::size_t>> keys;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    std::uint64_t code = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double u = std::clamp((lights[i].position[axis] - box.min[axis]) / extent[axis], 0.0, 1.0);
+      code |= spread(static_cast<std::uint64_t>(u * 2097151.0)) << axis;
+    }
+    keys.emplace_back(code, i);
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<VirtualPointLight> sorted;
+  sorted.reserve(lights.size());
+  for (const auto& key : keys) sorted.push_back(lights[key.second]);
+  lights = std::move(sorted);
+}
 
 class VplIntegrator final : public Integrator {
  public:
@@ -25,9 +61,13 @@ class VplIntegrator final : public Integrator {
       lights_ = trace_virtual_point_lights(context.scene, context.world,
                                            {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
     }
+    sort_spatially(lights_);
     // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its end,
     // moved off the surface towards that side, is the same for every shading point.
+    arrays_ = VplArrays(lights_);
     for (const VirtualPointLight& light : lights_) {
+      intensity_.push_back(light.power.cwiseProduct(light.brdf));
+      intensity_luminance_.push_back(luminance(intensity_.back()));
       ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal, light.distance));
       end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
     }
@@ -50,34 +90,50 @@ class VplIntegrator final : public Integrator {
   Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const override {
     Color radiance = Color::Zero();
     if (!context_.lights.empty()) radiance = direct_light(context_, point, random, visibility) / context_.options.shadow_rays;
+    // Per-thread buffers, read through plain pointers in the loops (a thread_local vector's
+    // fields would be reloaded on every iteration).
     thread_local std::vector<Vertex> ends;
     thread_local std::vector<unsigned> shells;
-    thread_local std::vector<std::size_t> which;
+    thread_local std::vector<std::uint32_t> which;
+    thread_local std::vector<std::int64_t> faces;
     thread_local std::vector<double> geometric, answers;
-    ends.clear(), shells.clear(), which.clear(), geometric.clear();
-    const Vertex& x = point.position;
-    for (std::size_t i = 0; i < lights_.size(); ++i) {
-      const VplGeometry g = vpl_geometry(x, point.hit->normal, lights_[i]);
-      if (!g.faces) continue;
-      which.push_back(i);
-      geometric.push_back(g.geometric);
-      ends.push_back(ends_[i]);
-      shells.push_back(end_shells_[i]);
+    const std::size_t count = lights_.size();
+    geometric.resize(count), faces.resize(count), which.resize(count);
+    double* const g = geometric.data();
+    std::uint32_t* const w = which.data();
+    vpl_geometry(point.position, point.hit->normal, arrays_, g, faces.data());
+    std::size_t facing = 0;
+    const std::int64_t* const f = faces.data();
+    for (std::size_t i = 0; i < count; ++i) {
+      w[facing] = static_cast<std::uint32_t>(i);
+      facing += static_cast<std::size_t>(f[i] & 1);
     }
-    point.stats->vpl_connections += ends.size();
-    answers.resize(ends.size());
+    ends.resize(facing), shells.resize(facing), answers.resize(facing);
+    {
+      Vertex* const e = ends.data();
+      unsigned* const sh = shells.data();
+      const Vertex* const from = ends_.data();
+      const unsigned* const from_shells = end_shells_.data();
+      for (std::size_t k = 0; k < facing; ++k) e[k] = from[w[k]], sh[k] = from_shells[w[k]];
+    }
+    point.stats->vpl_connections += facing;
     visibility.connections(ends, shells, answers);
     double energy = 0, dropped = 0;
-    for (std::size_t k = 0; k < which.size(); ++k) {
-      if (answers[k] == 0) continue;
-      const VirtualPointLight& light = lights_[which[k]];
-      const Color intensity = light.power.cwiseProduct(light.brdf);
-      const double g = std::min(geometric[k], max_geometric_);
-      radiance += (answers[k] * g) * intensity;
-      const double l = luminance(intensity) * answers[k];
-      energy += l * geometric[k];
-      dropped += l * (geometric[k] - g);
+    double r0 = radiance.x(), r1 = radiance.y(), r2 = radiance.z();
+    const double* const a = answers.data();
+    const Color* const intensity = intensity_.data();
+    const double* const intensity_luminance = intensity_luminance_.data();
+    const double max_geometric = max_geometric_;
+    for (std::size_t k = 0; k < facing; ++k) {
+      if (a[k] == 0) continue;
+      const std::size_t i = w[k];
+      const double clamped = std::min(g[i], max_geometric), weight = a[k] * clamped;
+      r0 += weight * intensity[i].x(), r1 += weight * intensity[i].y(), r2 += weight * intensity[i].z();
+      const double l = intensity_luminance[i] * a[k];
+      energy += l * g[i];
+      dropped += l * (g[i] - clamped);
     }
+    radiance = Color(r0, r1, r2);
     energy_[point.pixel] += luminance(brdf) * energy;
     dropped_[point.pixel] += luminance(brdf) * dropped;
     return brdf.cwiseProduct(radiance);
@@ -109,6 +165,9 @@ class VplIntegrator final : public Integrator {
   std::vector<VirtualPointLight> lights_;
   std::vector<Vertex> ends_;         // per VPL: the end of its connections
   std::vector<unsigned> end_shells_;  // per VPL: RenderWorld::convex_shells_holding(its end)
+  VplArrays arrays_{{}};
+  std::vector<Color> intensity_;          // per VPL: power x BRDF
+  std::vector<double> intensity_luminance_;
   bool given_ = false;
   double diagonal_ = 0, clamp_distance_ = 0, max_geometric_ = 0;
   // Per pixel, what the VPLs gave before clamping and what clamping dropped (luminance of

@@ -115,7 +115,8 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   // set. The disks stand for the others.
   const DiskPartition partition =
       prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
-                             options.split, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from);
+                             options.split, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from,
+                             options.disk_clusters);
   exact_part_.begin(shared_.context_.world, point.position, partition.traced);
   disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
   any_exact_ = partition.traced != 0;

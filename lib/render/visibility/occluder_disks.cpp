@@ -6,10 +6,18 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "render/visibility/visibility.h"
 
 namespace visproxy {
+
+namespace {
+
+// |w| in double, rounded to single precision: the same arithmetic in every form of the test.
+float segment_length(const Vertex& w) { return static_cast<float>(std::sqrt(w.x() * w.x() + w.y() * w.y() + w.z() * w.z())); }
+
+}  // namespace
 
 void OccluderDisks::reset(const Vertex& x, const Vertex& n) {
   x_ = x, n_ = n;
@@ -18,24 +26,55 @@ void OccluderDisks::reset(const Vertex& x, const Vertex& n) {
   bitangent_ = n.cross(tangent_);
   count_ = 0;
   disks_.clear();
+  groups_.clear();
   grid_ = false;
 }
 
-void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
-  for (const Sphere& ball : spheres) {
-    const Vertex v = ball.center - x_;
-    if (n_.dot(v) <= -ball.radius) continue;  // behind the tangent plane
+void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound) {
+  DiskGroup group;
+  group.begin = static_cast<std::uint32_t>(disks_.ux.size());
+  for (const Sphere* ball = first; ball != last; ++ball) {
+    const Vertex v = ball->center - x_;
+    if (n_.dot(v) <= -ball->radius) continue;  // behind the tangent plane
     const double t = v.norm();
-    if (self_heuristic && t < 2 * ball.radius) continue;
+    if (self_heuristic && t < 2 * ball->radius) continue;
     Vertex u = Vertex::UnitZ();
     double cos_gamma = -2;  // x inside the ball: every direction
-    if (t > ball.radius) {
+    if (t > ball->radius) {
       u = v / t;
-      cos_gamma = std::sqrt(t * t - ball.radius * ball.radius) / t;
+      cos_gamma = std::sqrt(t * t - ball->radius * ball->radius) / t;
     }
     disks_.push(static_cast<float>(u.x()), static_cast<float>(u.y()), static_cast<float>(u.z()), static_cast<float>(cos_gamma),
                 static_cast<float>(t));
-    ++count_;
+    ++group.count;
+  }
+  if (group.count == 0) return;
+  disks_.pad_to(kDiskBlock);
+  count_ += group.count;
+  if (bound) {
+    // The bound's cone, its radius grown by 2^-16 of its distance: at least 2^-16 radians
+    // wider on every side than the cones of the balls it holds, while the single-precision
+    // comparisons err by about 1e-6 radians.
+    const Vertex v = bound->center - x_;
+    const double t = v.norm(), radius = bound->radius + std::ldexp(t, -16);
+    if (t > radius) {
+      const Vertex u = v / t;
+      group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
+      group.cos = static_cast<float>(std::sqrt(t * t - radius * radius) / t);
+    }
+  }
+  groups_.push_back(group);
+}
+
+void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
+  add_balls(spheres.data(), spheres.data() + spheres.size(), self_heuristic, nullptr);
+}
+
+void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic) {
+  for (const SphereCluster& cluster : clusters) {
+    // Every ball of a bound behind the tangent plane is behind it too.
+    if (n_.dot(cluster.bound.center - x_) <= -cluster.bound.radius) continue;
+    add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound);
   }
 }
 
@@ -63,12 +102,17 @@ void OccluderDisks::finish(bool grid) {
     // lists are laid out one after another by a counting sort.
     constexpr int side = kGridSide, cells = side * side;
     thread_local std::vector<std::array<std::int16_t, 4>> rectangles;  // x0, x1, y0, y1 per disk; x0 < 0: every cell
-    rectangles.resize(count_);
+    const std::size_t entries_in = disks_.ux.size();
+    rectangles.resize(entries_in);
     cell_start_.assign(cells + 1, 0);
-    for (std::size_t j = 0; j < count_; ++j) {
+    for (std::size_t j = 0; j < entries_in; ++j) {
       std::array<std::int16_t, 4>& r = rectangles[j];
       r = {0, side - 1, 0, side - 1};
       const double cos_gamma = disks_.cos[j];
+      if (cos_gamma > 1) {
+        r = {1, 0, 1, 0};  // padding: no cell
+        continue;
+      }
       if (cos_gamma < -1) continue;  // x inside the ball
       const Vertex u(disks_.ux[j], disks_.uy[j], disks_.uz[j]);
       const double sin_gamma = std::sqrt(std::max(0.0, 1 - cos_gamma * cos_gamma));
@@ -92,7 +136,7 @@ void OccluderDisks::finish(bool grid) {
       auto cell = [](double v) { return static_cast<std::int16_t>(std::clamp(static_cast<int>(std::floor((v + 1) * 0.5 * side)), 0, side - 1)); };
       r = {cell(cx - radius), cell(cx + radius), cell(cy - radius), cell(cy + radius)};
     }
-    for (std::size_t j = 0; j < count_; ++j) {
+    for (std::size_t j = 0; j < entries_in; ++j) {
       const auto& r = rectangles[j];
       for (int y = r[2]; y <= r[3]; ++y)
         for (int x = r[0]; x <= r[1]; ++x) ++cell_start_[static_cast<std::size_t>(y * side + x) + 1];
@@ -102,7 +146,7 @@ void OccluderDisks::finish(bool grid) {
     cells_.ux.resize(entries), cells_.uy.resize(entries), cells_.uz.resize(entries), cells_.cos.resize(entries), cells_.t.resize(entries);
     thread_local std::vector<std::size_t> next;
     next.assign(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t j = 0; j < count_; ++j) {
+    for (std::size_t j = 0; j < entries_in; ++j) {
       const auto& r = rectangles[j];
       for (int y = r[2]; y <= r[3]; ++y)
         for (int x = r[0]; x <= r[1]; ++x) {
@@ -112,18 +156,26 @@ void OccluderDisks::finish(bool grid) {
         }
     }
   }
-  disks_.pad_to(kDiskBlock);
 }
 
 bool OccluderDisks::occludes(const Vertex& end, std::uint64_t& tests) const {
   if (count_ == 0) return false;
   const Vertex w = end - x_;
-  const double z = w.norm();
-  if (!(z > 0)) return false;
-  const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z()), zf = static_cast<float>(z);
-  tests += count_;
-  return any_disk_occludes(disks_.ux.data(), disks_.uy.data(), disks_.uz.data(), disks_.cos.data(), disks_.t.data(), disks_.ux.size(), dx,
-                           dy, dz, zf);
+  const float zf = segment_length(w);
+  if (!(zf > 0)) return false;
+  const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z());
+  for (const DiskGroup& group : groups_) {
+    if (group.cos >= -1) {
+      ++tests;
+      if (!(dx * group.ux + dy * group.uy + dz * group.uz > group.cos * zf)) continue;
+    }
+    tests += group.count;
+    const std::size_t b = group.begin, n = (group.count + kDiskBlock - 1) / kDiskBlock * kDiskBlock;
+    if (any_disk_occludes(disks_.ux.data() + b, disks_.uy.data() + b, disks_.uz.data() + b, disks_.cos.data() + b, disks_.t.data() + b, n,
+                          dx, dy, dz, zf))
+      return true;
+  }
+  return false;
 }
 
 __attribute__((target_clones("avx2", "default"))) bool any_disk_occludes(const float* ux, const float* uy, const float* uz,
@@ -139,31 +191,55 @@ __attribute__((target_clones("avx2", "default"))) bool any_disk_occludes(const f
   return false;
 }
 
+namespace {
+
+// w = end - x in single precision and z = |w| rounded from double, for m segments: the
+// inputs of the disk comparisons. Vectorised across segments.
+__attribute__((target_clones("avx2", "default"))) void segments_to_floats(const Vertex* __restrict ends, std::size_t m, const Vertex& x,
+                                                                         float* __restrict wx, float* __restrict wy, float* __restrict wz,
+                                                                         float* __restrict z) {
+  const double x0 = x.x(), x1 = x.y(), x2 = x.z();
+  const double* const e = ends[0].data();  // Vertex is three packed doubles
+  static_assert(sizeof(Vertex) == 3 * sizeof(double));
+  for (std::size_t k = 0; k < m; ++k) {
+    const double w0 = e[3 * k] - x0, w1 = e[3 * k + 1] - x1, w2 = e[3 * k + 2] - x2;
+    wx[k] = static_cast<float>(w0), wy[k] = static_cast<float>(w1), wz[k] = static_cast<float>(w2);
+    z[k] = static_cast<float>(std::sqrt(w0 * w0 + w1 * w1 + w2 * w2));
+  }
+}
+
+}  // namespace
+
 void OccluderDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const {
-  std::fill(hidden.begin(), hidden.end(), std::uint8_t{0});
-  if (count_ == 0) return;
+  if (count_ == 0) {
+    std::fill(hidden.begin(), hidden.end(), std::uint8_t{0});
+    return;
+  }
   thread_local std::vector<float> wx, wy, wz, z;
   thread_local std::vector<std::int32_t> any;
   thread_local std::vector<std::uint32_t> order, cell_of;
   thread_local std::vector<std::size_t> starts;
   const std::size_t m = ends.size();
-  wx.resize(m), wy.resize(m), wz.resize(m), z.resize(m), any.assign(m, 0);
+  if (m == 0) return;
   if (!grid_) {
-    for (std::size_t k = 0; k < m; ++k) {
-      const Vertex w = ends[k] - x_;
-      wx[k] = static_cast<float>(w.x()), wy[k] = static_cast<float>(w.y()), wz[k] = static_cast<float>(w.z());
-      z[k] = static_cast<float>(w.norm());
-    }
-    tests += count_ * m;
-    disks_hide_segments(disks_.ux.data(), disks_.uy.data(), disks_.uz.data(), disks_.cos.data(), disks_.t.data(), count_, wx.data(),
-                        wy.data(), wz.data(), z.data(), m, any.data());
-    for (std::size_t k = 0; k < m; ++k) hidden[k] = z[k] > 0 && any[k] != 0 ? 1 : 0;
+    // Padded to whole chunks of kChunk segments with segments of length 0, which nothing hides.
+    const std::size_t padded = (m + kChunk - 1) / kChunk * kChunk;
+    wx.resize(padded), wy.resize(padded), wz.resize(padded), z.resize(padded), any.assign(padded, 0);
+    float *const px = wx.data(), *const py = wy.data(), *const pz = wz.data(), *const pd = z.data();
+    std::int32_t* const pa = any.data();
+    segments_to_floats(ends.data(), m, x_, px, py, pz, pd);
+    for (std::size_t k = m; k < padded; ++k) px[k] = py[k] = pz[k] = pd[k] = 0;
+    tests += disk_groups_hide_chunks(groups_.data(), groups_.size(), disks_.ux.data(), disks_.uy.data(), disks_.uz.data(), disks_.cos.data(),
+                                     disks_.t.data(), px, py, pz, pd, m, pa);
+    std::uint8_t* const out = hidden.data();
+    for (std::size_t k = 0; k < m; ++k) out[k] = pd[k] > 0 && pa[k] != 0 ? 1 : 0;
     return;
   }
   // The grid: segments sorted by the cell of their direction (counting sort), then each
   // cell's disks against each cell's segments, disk by disk across the segments. Segments
   // that do not leave in front of the tangent plane take every disk.
   constexpr std::size_t cells = static_cast<std::size_t>(kGridSide) * kGridSide;
+  wx.resize(m), wy.resize(m), wz.resize(m), z.resize(m), any.assign(m, 0);
   cell_of.resize(m), order.resize(m);
   starts.assign(cells + 2, 0);
   for (std::size_t k = 0; k < m; ++k) {
@@ -184,14 +260,14 @@ void OccluderDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_
       order[slot] = static_cast<std::uint32_t>(k);
       const Vertex w = ends[k] - x_;
       wx[slot] = static_cast<float>(w.x()), wy[slot] = static_cast<float>(w.y()), wz[slot] = static_cast<float>(w.z());
-      z[slot] = static_cast<float>(w.norm());
+      z[slot] = segment_length(w);
     }
   }
   for (std::size_t c = 0; c <= cells; ++c) {
     const std::size_t begin = starts[c], count = starts[c + 1] - begin;
     if (count == 0) continue;
     const Soa& source = c < cells ? cells_ : disks_;
-    const std::size_t first = c < cells ? cell_start_[c] : 0, disks = c < cells ? cell_start_[c + 1] - first : count_;
+    const std::size_t first = c < cells ? cell_start_[c] : 0, disks = c < cells ? cell_start_[c + 1] - first : disks_.ux.size();
     tests += disks * count;
     disks_hide_segments(source.ux.data() + first, source.uy.data() + first, source.uz.data() + first, source.cos.data() + first,
                         source.t.data() + first, disks, wx.data() + begin, wy.data() + begin, wz.data() + begin, z.data() + begin, count,
@@ -219,6 +295,53 @@ __attribute__((target_clones("avx2", "default"))) void disks_hide_segments(const
   }
 }
 
+namespace {
+
+using Floats = float __attribute__((vector_size(4 * kChunk)));
+using Ints = std::int32_t __attribute__((vector_size(4 * kChunk)));
+static_assert(sizeof(Floats) / sizeof(float) == kChunk);
+
+// Whether any lane of a comparison's result (each lane 0 or -1) is set: the lanes ORed as
+// 64-bit words, which compiles to a vector test rather than a lane-by-lane extraction.
+inline bool any_lane(Ints v) {
+  std::uint64_t words[sizeof(Ints) / 8];
+  std::memcpy(words, &v, sizeof words);
+  std::uint64_t all = 0;
+  for (std::uint64_t w : words) all |= w;
+  return all != 0;
+}
+
+}  // namespace
+
+__attribute__((target_clones("avx2", "default"))) std::uint64_t disk_groups_hide_chunks(
+    const DiskGroup* groups, std::size_t group_count, const float* __restrict ux, const float* __restrict uy, const float* __restrict uz,
+    const float* __restrict cos_gamma, const float* __restrict t, const float* __restrict wx, const float* __restrict wy,
+    const float* __restrict wz, const float* __restrict z, std::size_t m, std::int32_t* __restrict hidden) {
+  std::uint64_t tests = 0;
+  for (std::size_t base = 0; base < m; base += kChunk) {
+    const std::uint64_t lanes = std::min(kChunk, m - base);
+    Floats x, y, w, d;
+    std::memcpy(&x, wx + base, sizeof x), std::memcpy(&y, wy + base, sizeof y), std::memcpy(&w, wz + base, sizeof w);
+    std::memcpy(&d, z + base, sizeof d);
+    Ints any;
+    std::memcpy(&any, hidden + base, sizeof any);
+    for (std::size_t g = 0; g < group_count; ++g) {
+      const DiskGroup& group = groups[g];
+      if (group.cos >= -1) {
+        tests += lanes;
+        const Ints in_cone = x * group.ux + y * group.uy + w * group.uz > group.cos * d;
+        if (!any_lane(in_cone & ~any)) continue;
+      }
+      tests += lanes * group.count;
+      for (std::size_t j = group.begin, end = group.begin + group.count; j < end; ++j)
+        any |= (x * ux[j] + y * uy[j] + w * uz[j] > cos_gamma[j] * d) & (t[j] < d);
+      if (!any_lane(~any)) break;
+    }
+    std::memcpy(hidden + base, &any, sizeof any);
+  }
+  return tests;
+}
+
 __attribute__((optimize("no-tree-vectorize"))) bool any_disk_occludes_scalar(const float* ux, const float* uy, const float* uz,
                                                                              const float* cos_gamma, const float* t, std::size_t n,
                                                                              float wx, float wy, float wz, float z) {
@@ -237,7 +360,8 @@ bool disk_occludes_reference(const Vertex& x, const Sphere& ball, const Vertex& 
 }
 
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
-                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from) {
+                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,
+                                     bool clusters) {
   DiskPartition partition;
   disks.reset(position, hit.normal);
   for (std::size_t i = 0; i < instances; ++i) {
@@ -248,7 +372,10 @@ DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& wo
       if (!(is_own && hit.own_mesh_behind)) partition.traced |= instance_bit(i);
       continue;
     }
-    disks.add(balls, is_own && own_heuristic);
+    if (clusters)
+      disks.add(balls, world.occluder_clusters(i), is_own && own_heuristic);
+    else
+      disks.add(balls, is_own && own_heuristic);
     partition.disks |= instance_bit(i);
   }
   disks.finish(disks.size() >= grid_from);
@@ -295,7 +422,8 @@ void OccluderDiskPoint::begin(const ShadingPoint& point) {
   const RenderOptions& options = shared_.context_.options;
   const DiskPartition partition =
       prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
-                             options.self_shadow == SelfShadow::exact, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from);
+                             options.self_shadow == SelfShadow::exact, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from,
+                             options.disk_clusters);
   traced_.begin(shared_.context_.world, point.position, partition.traced);
   any_traced_ = partition.traced != 0;
 }
@@ -317,9 +445,11 @@ void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<cons
   const RenderWorld& world = shared_.context_.world;
   hidden_.resize(ends.size());
   disks_.occludes(ends, hidden_, stats.disk_tests);
+  const std::uint8_t* const hidden = hidden_.data();
+  for (std::size_t i = 0; i < ends.size(); ++i) out[i] = hidden[i] ? 0 : 1;
+  if (!any_traced_) return;
   for (std::size_t i = 0; i < ends.size(); ++i) {
-    out[i] = hidden_[i] ? 0 : 1;
-    if (out[i] == 0 || !any_traced_) continue;
+    if (hidden[i]) continue;
     const unsigned lane = traced_.lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]);
     if (lane == 0) continue;
     rest_.push_back(ends[i]), rest_index_.push_back(i), lanes_.push_back(lane);

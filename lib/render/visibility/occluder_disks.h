@@ -16,8 +16,20 @@
 
 namespace visproxy {
 
+/// A run of disks [begin, begin + count), then padding, with the cone of a bound that
+/// holds their balls (cos < -1: every direction, for no bound or a point inside it), as
+/// OccluderDisks keeps them.
+struct DiskGroup {
+  float ux = 0, uy = 0, uz = 1, cos = -2;
+  std::uint32_t begin = 0, count = 0;
+};
+
 /// The balls of a set as occluder disks from one point, in structure-of-arrays form
-/// (single precision, padded to a multiple of kDiskBlock with balls that hide nothing).
+/// (single precision), in groups: the balls of one cluster (SphereCluster) after each other,
+/// padded to a multiple of kDiskBlock with balls that hide nothing. A group with a bound
+/// has that bound's cone too, grown by 2^-16 of its distance (a margin far above
+/// single-precision rounding): a segment outside it is outside every cone of the group's
+/// balls, so the group's balls need no test. The answers are those of testing every ball.
 class OccluderDisks {
  public:
   static constexpr std::size_t kDiskBlock = 16;
@@ -25,25 +37,32 @@ class OccluderDisks {
   /// Starts over for the point `x` with unit normal `n`. Balls entirely behind the tangent
   /// plane (n . (O - x) <= -R) cannot hide a segment that leaves towards n and are left out.
   void reset(const Vertex& x, const Vertex& n);
-  /// Adds the balls of `spheres`; `self_heuristic` skips those with t < 2R (the shading
-  /// point's own object, §4.2). A ball holding x (t <= R) hides every segment longer than t.
+  /// Adds the balls of `spheres` as one group without a bound; `self_heuristic` skips those
+  /// with t < 2R (the shading point's own object, §4.2). A ball holding x (t <= R) hides
+  /// every segment longer than t.
   void add(const std::vector<Sphere>& spheres, bool self_heuristic);
-  /// Pads the arrays; call after the last add() and before occludes(). With `grid`, also
-  /// sorts the disks into a grid over the stereographic projection of the hemisphere
-  /// around n (a spherical cap projects to a disc): each cell lists the disks whose cap
-  /// can reach it, so that the group form of occludes() compares a segment only with its
-  /// cell's disks. The answers are the same with and without the grid.
+  /// The same, one group per cluster (clusters over `spheres` as cluster_spheres() returns
+  /// them); a cluster whose bound lies behind the tangent plane is left out whole.
+  void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic);
+  /// Call after the last add() and before occludes(). With `grid`, also sorts the disks
+  /// into a grid over the stereographic projection of the hemisphere around n (a spherical
+  /// cap projects to a disc): each cell lists the disks whose cap can reach it, so that the
+  /// group form of occludes() compares a segment only with its cell's disks. The answers
+  /// are the same with and without the grid.
   void finish(bool grid = false);
 
-  /// Whether the segment from x to `end` is occluded by a disk; adds the disks compared to
-  /// `tests`.
+  /// Whether the segment from x to `end` is occluded by a disk; adds the comparisons made
+  /// (bounds and disks) to `tests`.
   bool occludes(const Vertex& end, std::uint64_t& tests) const;
-  /// occludes() for many segments from x: hidden[i] for the segment to ends[i]. The
-  /// comparisons run disk by disk across the segments (vectorised across segments); with
-  /// the grid, cell by cell: each cell's disks across the segments whose direction falls
-  /// into it.
+  /// occludes() for many segments from x: hidden[i] for the segment to ends[i]. Group by
+  /// group, the segments inside the group's bound that no group before hid, then the
+  /// group's disks one by one across those segments (vectorised across segments); with the
+  /// grid, cell by cell: each cell's disks across the segments whose direction falls into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
+  /// Disks kept (padding not counted).
   std::size_t size() const { return count_; }
+  /// Groups kept.
+  std::size_t groups() const { return groups_.size(); }
 
   /// Grid cells per side over [-1, 1]^2 of the projection.
   static constexpr int kGridSide = 8;
@@ -57,9 +76,12 @@ class OccluderDisks {
       while (ux.size() % multiple != 0) push(0, 0, 1, 2, 0);  // hides nothing: cos gamma above any cosine
     }
   };
+  void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound);
+
   Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;
   Soa disks_;
+  std::vector<DiskGroup> groups_;
   bool grid_ = false;
   Soa cells_;                            // every cell's disks, one after the other
   std::vector<std::size_t> cell_start_;  // kGridSide^2 + 1 offsets into cells_
@@ -70,23 +92,35 @@ class OccluderDisks {
 /// except the own instance when `trace_own` (its balls with t < 2R skipped when
 /// `own_heuristic`), sorted into the grid when there are at least `grid_from`. `traced`:
 /// the instances to trace exactly instead (those without a sphere set, and the own one when
-/// `trace_own`, unless its mesh lies behind the tangent plane); `disks`: the others.
+/// `trace_own`, unless its mesh lies behind the tangent plane); `disks`: the others. With
+/// `clusters`, each instance's balls come in the groups of RenderWorld::occluder_clusters.
 struct DiskPartition {
   unsigned traced = 0, disks = 0;  ///< instance_bit()s
 };
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
-                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from);
+                                     const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,
+                                     bool clusters = true);
 
 /// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
 /// segment to w = (wx, wy, wz) at distance z = |w|: w . u_j > cos_j z (cos delta > cos
-/// gamma) and t_j < z. Vectorised across disks, blocks of 16 at a time, with AVX2 where
-/// the processor has it.
+/// gamma) and t_j < z. Vectorised across disks, blocks of kDiskBlock at a time, with AVX2
+/// where the processor has it.
 bool any_disk_occludes(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t, std::size_t n,
                        float wx, float wy, float wz, float z);
 /// hidden[k] |= whether disk j hides segment k, for every disk j < n and segment k < m
 /// (segments given as above: w_k and z_k). Vectorised across segments.
 void disks_hide_segments(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t, std::size_t n,
                          const float* wx, const float* wy, const float* wz, const float* z, std::size_t m, std::int32_t* hidden);
+/// Segments per chunk of disk_groups_hide_chunks().
+inline constexpr std::size_t kChunk = 8;
+/// hidden[k] |= whether a disk of the groups hides segment k < m (segments as above), chunk
+/// of kChunk segments by chunk: a group's disks are compared with a chunk only when some
+/// segment of it, not hidden yet, lies in the group's cone, and a chunk stops once every
+/// segment in it is hidden. Every array runs to m rounded up to a multiple of kChunk.
+/// Returns the comparisons made (bounds and disks, over the chunk's segments below m).
+std::uint64_t disk_groups_hide_chunks(const DiskGroup* groups, std::size_t group_count, const float* ux, const float* uy, const float* uz,
+                                      const float* cos_gamma, const float* t, const float* wx, const float* wy, const float* wz,
+                                      const float* z, std::size_t m, std::int32_t* hidden);
 /// The same, one disk at a time with an early exit and no vectorisation: the baseline the
 /// benchmark compares with.
 bool any_disk_occludes_scalar(const float* ux, const float* uy, const float* uz, const float* cos_gamma, const float* t,

@@ -21,10 +21,6 @@ void ExactConnections::begin(const RenderWorld& world, const Vertex& from, unsig
   from_shells_ = world.convex_shells_holding(from);
 }
 
-unsigned ExactConnections::lane(const Vertex& end, const unsigned* end_shells) const {
-  return bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
-}
-
 bool ExactConnections::blocked(const Vertex& end) const {
   return world_->mesh_blocks(from_, end, {.skip = -1, .only = -1, .bits = lane(end)});
 }

@@ -97,7 +97,9 @@ class ExactConnections {
   /// The instances a segment to `end` must still be traced against: those of `bits` whose
   /// convex shell does not hold both ends. `end_shells`, if known, is
   /// convex_shells_holding(end).
-  unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const;
+  unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const {
+    return bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
+  }
   bool blocked(const Vertex& end) const;
   /// blocked[i] for ends[i]; `end_shells` as in PointVisibility::connections.
   void blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked);
