@@ -66,6 +66,9 @@ std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOpti
     r.vpls = o.vpls;
     r.bounces = o.bounces;
     r.vpl_seed = o.vpl_seed;
+    // As visproxy render: with VPLs, hundreds of connections per shading point share the
+    // variance, and fewer corrections pay.
+    if (o.integrator == IntegratorKind::vpl) r.correction_scale = 0.25;
     return r;
   };
   std::vector<Mode> out{{"exact", "", base(VisibilityMode::exact)}, {"bounds", "", base(VisibilityMode::bounds)}};

@@ -37,7 +37,7 @@ struct RenderCommandOptions {
   bool no_split = false;
   int probe_rays = 16;
   double probability_floor = 0.05;
-  double correction_scale = 2;
+  double correction_scale = 0;  // 0: not given (2, or 0.25 with --integrator vpl)
   int spp = 16;
   int shadow_rays = 1;
   std::uint64_t seed = 1;
@@ -133,7 +133,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 0.33));
   command->add_option("--correction-scale", o->correction_scale,
                       "control-variate, adaptive or learned: trace the mesh with probability min(1, scale x sqrt(p)) where "
-                      "the proxy's answer is wrong with probability p [default: 2]")
+                      "the proxy's answer is wrong with probability p [default: 2; 0.25 with --integrator vpl, whose hundreds "
+                      "of connections per shading point share the variance]")
       ->check(CLI::Range(0.01, 1000.0));
   command->add_option("--spp", o->spp, "Camera samples per pixel [default: 16]")->check(CLI::Range(1, 1 << 24));
   command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample (M) [default: 1]")->check(CLI::Range(1, 4096));
@@ -180,6 +181,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
                                                  : prepare_scene_proxies(scene, proxy_options);
     const RenderWorld world(scene, proxies, {.counting = o->count});
     for (const std::string& note : world.notes()) std::cerr << "visproxy render: note: " << note << "\n";
+    if (o->correction_scale == 0) o->correction_scale = o->integrator == IntegratorKind::vpl ? 0.25 : 2.0;
     RenderOptions options{.integrator = o->integrator,
                           .visibility = o->visibility,
                           .probabilities = o->probabilities,
