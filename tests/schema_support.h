@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/files.h"
+#include "visproxy/core/files.h"
 
 namespace visproxy::testing {
 

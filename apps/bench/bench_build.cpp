@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "mesh/subdivide.h"
-#include "proxy/build_proxies.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
+#include "visproxy/proxy/build_proxies.h"
 
 #ifndef VISPROXY_MESH_DIR
 #error "VISPROXY_MESH_DIR must name the folder of the extracted libcgal-demo meshes"

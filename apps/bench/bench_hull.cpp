@@ -27,10 +27,10 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "proxy/bounded_hull.h"
-#include "proxy/convex_hull.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/bounded_hull.h"
+#include "visproxy/proxy/convex_hull.h"
 
 #ifndef VISPROXY_MESH_DIR
 #error "VISPROXY_MESH_DIR must name the folder of the extracted libcgal-demo meshes"

@@ -20,11 +20,11 @@
 #include <string>
 #include <vector>
 
-#include "measure/proxy_measurement.h"
-#include "measure/random_lines.h"
-#include "mesh/read_mesh.h"
-#include "mesh/subdivide.h"
-#include "trace/ray_scene.h"
+#include "visproxy/measure/proxy_measurement.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace {
 

@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "measure/proportion.h"
-#include "measure/random_lines.h"
-#include "mesh/read_mesh.h"
-#include "proxy/alpha_wrap.h"
-#include "proxy/outer_hull.h"
-#include "trace/ray_scene.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/alpha_wrap.h"
+#include "visproxy/proxy/outer_hull.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace {
 

@@ -33,8 +33,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 
 #ifndef VISPROXY_MESH_DIR
 #error "VISPROXY_MESH_DIR must name the folder of the extracted libcgal-demo meshes"

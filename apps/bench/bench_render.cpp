@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "evaluate/scene_proxies.h"
-#include "render/renderer.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/renderer.h"
 
 namespace {
 

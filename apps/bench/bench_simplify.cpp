@@ -51,12 +51,12 @@
 #include <string_view>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "mesh/subdivide.h"
-#include "proxy/quadric_simplify.h"
-#include "proxy/surface_distance.h"
-#include "proxy/vertex_clustering.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
+#include "visproxy/proxy/quadric_simplify.h"
+#include "visproxy/proxy/surface_distance.h"
+#include "visproxy/proxy/vertex_clustering.h"
 
 #ifndef VISPROXY_MESH_DIR
 #error "VISPROXY_MESH_DIR must name the folder of the extracted libcgal-demo meshes"

@@ -22,14 +22,14 @@
 #include <string>
 #include <vector>
 
-#include "measure/proxy_measurement.h"
-#include "measure/random_lines.h"
-#include "mesh/read_mesh.h"
-#include "mesh/subdivide.h"
-#include "proxy/circumsphere_set.h"
-#include "proxy/inscribed_spheres.h"
-#include "proxy/merge_spheres.h"
-#include "trace/ray_scene.h"
+#include "visproxy/measure/proxy_measurement.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
+#include "visproxy/proxy/circumsphere_set.h"
+#include "visproxy/proxy/inscribed_spheres.h"
+#include "visproxy/proxy/merge_spheres.h"
+#include "visproxy/trace/ray_scene.h"
 
 #ifndef VISPROXY_MESH_DIR
 #error "VISPROXY_MESH_DIR must name the folder of the extracted libcgal-demo meshes"

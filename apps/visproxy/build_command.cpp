@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "commands.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/read_mesh.h"
-#include "proxy/build_proxies.h"
-#include "proxy/manifest.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
+#include "visproxy/proxy/manifest.h"
 
 namespace visproxy::cli {
 namespace {

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "commands.h"
-#include "core/errors.h"
-#include "core/files.h"
-#include "evaluate/plot.h"
-#include "evaluate/scene_proxies.h"
-#include "render/renderer.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/evaluate/plot.h"
+#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/renderer.h"
 
 namespace visproxy::cli {
 namespace {

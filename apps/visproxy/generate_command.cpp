@@ -7,13 +7,13 @@
 #include <vector>
 
 #include "commands.h"
-#include "core/errors.h"
-#include "core/files.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/write_mesh.h"
-#include "proxy/build_proxies.h"
-#include "proxy/manifest.h"
-#include "scene/hairball.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/write_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
+#include "visproxy/proxy/manifest.h"
+#include "visproxy/scene/hairball.h"
 
 namespace visproxy::cli {
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "commands.h"
-#include "inspect/mesh_report.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/inspect/mesh_report.h"
+#include "visproxy/mesh/read_mesh.h"
 
 namespace visproxy::cli {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "commands.h"
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy::cli {
 

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "commands.h"
-#include "evaluate/measure_proxies.h"
-#include "evaluate/proxy_folder.h"
+#include "visproxy/evaluate/measure_proxies.h"
+#include "visproxy/evaluate/proxy_folder.h"
 
 namespace visproxy::cli {
 namespace {

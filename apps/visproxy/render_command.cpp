@@ -9,10 +9,10 @@
 #include <string>
 
 #include "commands.h"
-#include "core/errors.h"
-#include "core/files.h"
-#include "evaluate/scene_proxies.h"
-#include "render/renderer.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/renderer.h"
 
 namespace visproxy::cli {
 namespace {

@@ -4,8 +4,8 @@
 #include <filesystem>
 
 #include "commands.h"
-#include "evaluate/proxy_folder.h"
-#include "evaluate/report.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/report.h"
 
 namespace visproxy::cli {
 

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "commands.h"
-#include "evaluate/proxy_folder.h"
-#include "evaluate/verify_proxy.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/verify_proxy.h"
 
 namespace visproxy::cli {
 namespace {

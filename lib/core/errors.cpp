@@ -1,4 +1,4 @@
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 

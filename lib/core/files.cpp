@@ -1,4 +1,4 @@
-#include "core/files.h"
+#include "visproxy/core/files.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -9,7 +9,7 @@
 #include <system_error>
 #include <utility>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -1,9 +1,9 @@
-#include "core/json_input.h"
+#include "visproxy/core/json_input.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 

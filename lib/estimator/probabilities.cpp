@@ -3,7 +3,7 @@
 // (eq. 14/16 for the variance, 22-24 for the cost heuristic; the closed forms here are
 // written without the singularities of the printed ones, see probabilities.h).
 
-#include "estimator/probabilities.h"
+#include "visproxy/estimator/probabilities.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,7 +15,7 @@
 #include <array>
 #include <cstdint>
 
-#include "core/proxy_kind.h"
+#include "visproxy/core/proxy_kind.h"
 
 namespace visproxy {
 

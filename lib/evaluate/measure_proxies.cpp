@@ -1,11 +1,11 @@
-#include "evaluate/measure_proxies.h"
+#include "visproxy/evaluate/measure_proxies.h"
 
 #include <chrono>
 
-#include "core/errors.h"
-#include "evaluate/proxy_folder.h"
-#include "measure/random_lines.h"
-#include "render/renderer.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/render/renderer.h"
 
 namespace visproxy {
 namespace {

@@ -7,9 +7,9 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "core/errors.h"
-#include "measure/proxy_measurement.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/measure/proxy_measurement.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

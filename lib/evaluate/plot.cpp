@@ -1,4 +1,4 @@
-#include "evaluate/plot.h"
+#include "visproxy/evaluate/plot.h"
 
 #include <algorithm>
 #include <cmath>

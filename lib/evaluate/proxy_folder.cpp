@@ -1,9 +1,9 @@
-#include "evaluate/proxy_folder.h"
+#include "visproxy/evaluate/proxy_folder.h"
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "core/json_input.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/core/json_input.h"
+#include "visproxy/mesh/read_mesh.h"
 
 namespace visproxy {
 namespace {

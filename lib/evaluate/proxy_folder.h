@@ -7,10 +7,10 @@
 #include <string_view>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
-#include "proxy/build_proxies.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
 
 namespace visproxy {
 

@@ -1,11 +1,11 @@
-#include "evaluate/report.h"
+#include "visproxy/evaluate/report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "core/files.h"
+#include "visproxy/core/files.h"
 
 namespace visproxy {
 namespace {

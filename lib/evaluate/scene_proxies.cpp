@@ -1,15 +1,15 @@
-#include "evaluate/scene_proxies.h"
+#include "visproxy/evaluate/scene_proxies.h"
 
 #include <cstdlib>
 #include <cstring>
 #include <map>
 
-#include "core/errors.h"
-#include "evaluate/proxy_folder.h"
-#include "evaluate/verify_proxy.h"
-#include "mesh/mesh_topology.h"
-#include "proxy/build_proxies.h"
-#include "proxy/manifest.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/build_proxies.h"
+#include "visproxy/proxy/manifest.h"
 
 namespace visproxy {
 namespace {

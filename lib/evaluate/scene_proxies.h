@@ -9,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "render/render_world.h"
-#include "scene/scene.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy {
 

@@ -1,15 +1,15 @@
-#include "evaluate/verify_proxy.h"
+#include "visproxy/evaluate/verify_proxy.h"
 
 #include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
-#include "proxy/surface_distance.h"
-#include "verify/containment.h"
-#include "verify/sphere_containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/surface_distance.h"
+#include "visproxy/verify/containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "evaluate/proxy_folder.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,6 +1,6 @@
 // The only translation unit of lib/inspect that includes CGAL.
 
-#include "inspect/exact_checks.h"
+#include "visproxy/inspect/exact_checks.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>

@@ -1,10 +1,10 @@
-#include "inspect/mesh_report.h"
+#include "visproxy/inspect/mesh_report.h"
 
 #include <nlohmann/json.hpp>
 
 #include <chrono>
 
-#include "inspect/exact_checks.h"
+#include "visproxy/inspect/exact_checks.h"
 
 namespace visproxy {
 

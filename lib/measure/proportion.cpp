@@ -1,4 +1,4 @@
-#include "measure/proportion.h"
+#include "visproxy/measure/proportion.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "measure/proxy_measurement.h"
+#include "visproxy/measure/proxy_measurement.h"
 
 #include <algorithm>
 #include <chrono>

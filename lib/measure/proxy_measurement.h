@@ -8,10 +8,10 @@
 #include <span>
 #include <vector>
 
-#include "core/proxy_kind.h"
-#include "estimator/probabilities.h"
-#include "measure/proportion.h"
-#include "trace/ray_scene.h"
+#include "visproxy/core/proxy_kind.h"
+#include "visproxy/estimator/probabilities.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 

@@ -1,6 +1,6 @@
-#include "measure/random_lines.h"
+#include "visproxy/measure/random_lines.h"
 
-#include "core/random.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 

@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
-#include "trace/ray_scene.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "mesh/mesh_parsing.h"
+#include "visproxy/mesh/mesh_parsing.h"
 
 #include <algorithm>
 #include <charconv>
@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy::parsing {
 namespace {

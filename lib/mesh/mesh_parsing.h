@@ -8,8 +8,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy::parsing {
 

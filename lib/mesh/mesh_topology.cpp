@@ -1,10 +1,10 @@
-#include "mesh/mesh_topology.h"
+#include "visproxy/mesh/mesh_topology.h"
 
 #include <algorithm>
 #include <numeric>
 #include <string>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -1,4 +1,4 @@
-#include "mesh/read_mesh.h"
+#include "visproxy/mesh/read_mesh.h"
 
 #include <algorithm>
 #include <bit>
@@ -7,9 +7,9 @@
 #include <string>
 #include <unordered_map>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "mesh/mesh_parsing.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy {
 

@@ -10,8 +10,8 @@
 #include <optional>
 #include <string_view>
 
-#include "core/errors.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "mesh/mesh_parsing.h"
+#include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy::parsing {
 

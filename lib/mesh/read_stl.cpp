@@ -6,8 +6,8 @@
 #include <cstring>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/mesh_parsing.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy::parsing {
 namespace {

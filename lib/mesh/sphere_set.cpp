@@ -1,4 +1,4 @@
-#include "mesh/sphere_set.h"
+#include "visproxy/mesh/sphere_set.h"
 
 #include <algorithm>
 #include <array>
@@ -7,10 +7,10 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "core/json_input.h"
-#include "mesh/subdivide.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/core/json_input.h"
+#include "visproxy/mesh/subdivide.h"
 
 namespace visproxy {
 namespace {
@@ -143,20 +143,26 @@ TriangleMesh sphere_union_boundary_mesh(const std::vector<Sphere>& spheres, int 
 
 namespace {
 
+// A ball holding spheres[begin, end): centre at the middle of their extents' box, radius
+// the largest distance to a far side, grown by 2^-40 of the magnitudes.
+Sphere bound_of(const std::vector<Sphere>& spheres, std::size_t begin, std::size_t end) {
+  Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (std::size_t i = begin; i < end; ++i) {
+    low = low.cwiseMin(spheres[i].center - Vertex::Constant(spheres[i].radius));
+    high = high.cwiseMax(spheres[i].center + Vertex::Constant(spheres[i].radius));
+  }
+  const Vertex centre = 0.5 * (low + high);
+  double radius = 0, magnitude = centre.cwiseAbs().maxCoeff();
+  for (std::size_t i = begin; i < end; ++i) {
+    radius = std::max(radius, (spheres[i].center - centre).norm() + spheres[i].radius);
+    magnitude = std::max(magnitude, spheres[i].center.cwiseAbs().maxCoeff() + spheres[i].radius);
+  }
+  return {centre, radius + std::ldexp(magnitude, -40)};
+}
+
 void split_spheres(std::vector<Sphere>& spheres, std::size_t begin, std::size_t end, std::size_t leaf, std::vector<SphereCluster>& out) {
   if (end - begin <= leaf) {
-    Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
-    for (std::size_t i = begin; i < end; ++i) {
-      low = low.cwiseMin(spheres[i].center - Vertex::Constant(spheres[i].radius));
-      high = high.cwiseMax(spheres[i].center + Vertex::Constant(spheres[i].radius));
-    }
-    const Vertex centre = 0.5 * (low + high);
-    double radius = 0, magnitude = centre.cwiseAbs().maxCoeff();
-    for (std::size_t i = begin; i < end; ++i) {
-      radius = std::max(radius, (spheres[i].center - centre).norm() + spheres[i].radius);
-      magnitude = std::max(magnitude, spheres[i].center.cwiseAbs().maxCoeff() + spheres[i].radius);
-    }
-    out.push_back({{centre, radius + std::ldexp(magnitude, -40)}, static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)});
+    out.push_back({bound_of(spheres, begin, end), static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)});
     return;
   }
   Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
@@ -178,11 +184,19 @@ void split_spheres(std::vector<Sphere>& spheres, std::size_t begin, std::size_t 
 
 }  // namespace
 
-std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::size_t leaf) {
+std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::size_t leaf, std::size_t group) {
   std::vector<SphereCluster> clusters;
   if (spheres.empty()) return clusters;
   split_spheres(spheres, 0, spheres.size(), std::max<std::size_t>(leaf, 1), clusters);
-  return clusters;
+  if (group < 2) return clusters;
+  std::vector<SphereCluster> headed;
+  for (std::size_t first = 0; first < clusters.size(); first += group) {
+    const std::size_t last = std::min(first + group, clusters.size());
+    const std::uint32_t begin = clusters[first].begin, end = clusters[last - 1].end;
+    headed.push_back({bound_of(spheres, begin, end), begin, end, static_cast<std::uint32_t>(last - first)});
+    headed.insert(headed.end(), clusters.begin() + static_cast<std::ptrdiff_t>(first), clusters.begin() + static_cast<std::ptrdiff_t>(last));
+  }
+  return headed;
 }
 
 }  // namespace visproxy

@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 
@@ -47,17 +47,21 @@ TriangleMesh sphere_set_mesh(const std::vector<Sphere>& spheres, int levels = 2)
 TriangleMesh sphere_union_boundary_mesh(const std::vector<Sphere>& spheres, int levels = 2);
 
 /// A run of nearby spheres, spheres[begin, end) of the set cluster_spheres() reordered, and a
-/// ball that holds every one of them.
+/// ball that holds every one of them. A cluster with children > 0 heads the next `children`
+/// clusters of the list, and its run is theirs.
 struct SphereCluster {
   Sphere bound;
   std::uint32_t begin = 0, end = 0;
+  std::uint32_t children = 0;
 };
 
 /// Reorders `spheres` into clusters of at most `leaf` (at least 1) by median splits along
 /// the longest side of their centres' bounding box, and returns the clusters in order; each
 /// bound holds its spheres in double arithmetic rounded outwards (centre at the middle of
 /// their extents' box, radius the largest distance to a far side, grown by 2^-40 of the
-/// magnitudes). Deterministic. Empty for an empty set.
-std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::size_t leaf);
+/// magnitudes). With `group` of 2 or more, each run of `group` consecutive clusters (the
+/// order keeps siblings of the splits together) is preceded by a cluster that heads them,
+/// with a bound of all their spheres. Deterministic. Empty for an empty set.
+std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::size_t leaf, std::size_t group = 0);
 
 }  // namespace visproxy

@@ -1,4 +1,4 @@
-#include "mesh/subdivide.h"
+#include "visproxy/mesh/subdivide.h"
 
 #include <algorithm>
 #include <cassert>
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -1,7 +1,7 @@
 #pragma once
 // Midpoint subdivision: more triangles over the same surface, for making large test inputs.
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

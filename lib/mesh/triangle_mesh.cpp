@@ -1,10 +1,10 @@
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 #include <cmath>
 #include <cstdio>
 #include <string>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 

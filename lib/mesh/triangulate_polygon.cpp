@@ -5,7 +5,7 @@
 #include <array>
 #include <cmath>
 
-#include "mesh/mesh_parsing.h"
+#include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy::parsing {
 namespace {

@@ -1,13 +1,13 @@
-#include "mesh/write_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 
 #include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cstring>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/read_mesh.h"
 
 namespace visproxy {
 namespace {

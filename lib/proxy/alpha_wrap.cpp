@@ -5,7 +5,7 @@
 // corners, so those go in as segments (or points) through CGAL's stacked oracles, and the
 // wrap encloses every point of every input triangle.
 
-#include "proxy/alpha_wrap.h"
+#include "visproxy/proxy/alpha_wrap.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "proxy/triangle_soup.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/proxy/triangle_soup.h"
 
 namespace visproxy {
 namespace {

@@ -2,7 +2,7 @@
 // Alpha wrapping: a watertight, 2-manifold, self-intersection-free surface that contains any
 // triangle input, even a soup with holes, cracks and self-intersections. An *outside* proxy.
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -19,7 +19,7 @@
 // cap the removal adds) is computed in double and only orders the removals. The output's
 // corners are computed in double; containment of the input is then checked exactly.
 
-#include "proxy/bounded_hull.h"
+#include "visproxy/proxy/bounded_hull.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
@@ -36,9 +36,9 @@
 #include <string>
 #include <tuple>
 
-#include "core/errors.h"
-#include "proxy/convex_hull.h"
-#include "proxy/hull_facets.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/proxy/convex_hull.h"
+#include "visproxy/proxy/hull_facets.h"
 
 namespace visproxy {
 namespace {

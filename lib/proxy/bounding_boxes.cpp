@@ -2,7 +2,7 @@
 // bounding box optimization on the rotation group SO(3, R)") provides candidate axes; the
 // extents are fitted here and containment is proved with exact predicates.
 
-#include "proxy/bounding_boxes.h"
+#include "visproxy/proxy/bounding_boxes.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/optimal_bounding_box.h>
@@ -14,8 +14,8 @@
 #include <limits>
 #include <map>
 
-#include "core/errors.h"
-#include "verify/containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

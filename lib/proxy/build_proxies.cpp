@@ -1,27 +1,27 @@
-#include "proxy/build_proxies.h"
+#include "visproxy/proxy/build_proxies.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <optional>
 
-#include "core/errors.h"
-#include "inspect/mesh_report.h"
-#include "measure/proportion.h"
-#include "measure/proxy_measurement.h"
-#include "measure/random_lines.h"
-#include "mesh/mesh_topology.h"
-#include "proxy/alpha_wrap.h"
-#include "proxy/bounded_hull.h"
-#include "proxy/convex_hull.h"
-#include "proxy/inscribed_spheres.h"
-#include "proxy/merge_spheres.h"
-#include "proxy/outer_hull.h"
-#include "proxy/quadric_simplify.h"
-#include "proxy/surface_distance.h"
-#include "proxy/vertex_clustering.h"
-#include "proxy/watertight_input.h"
-#include "trace/ray_scene.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/inspect/mesh_report.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/measure/proxy_measurement.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/alpha_wrap.h"
+#include "visproxy/proxy/bounded_hull.h"
+#include "visproxy/proxy/convex_hull.h"
+#include "visproxy/proxy/inscribed_spheres.h"
+#include "visproxy/proxy/merge_spheres.h"
+#include "visproxy/proxy/outer_hull.h"
+#include "visproxy/proxy/quadric_simplify.h"
+#include "visproxy/proxy/surface_distance.h"
+#include "visproxy/proxy/vertex_clustering.h"
+#include "visproxy/proxy/watertight_input.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 namespace {

@@ -10,11 +10,11 @@
 #include <string_view>
 #include <vector>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
-#include "proxy/bounding_boxes.h"
-#include "proxy/circumsphere_set.h"
-#include "proxy/proxy_spec.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/proxy/bounding_boxes.h"
+#include "visproxy/proxy/circumsphere_set.h"
+#include "visproxy/proxy/proxy_spec.h"
 
 namespace visproxy {
 

@@ -4,7 +4,7 @@
 // robust alternative uses H. Si, "TetGen, a Delaunay-based quality tetrahedral mesh
 // generator", ACM TOMS 41(2), 2015 (constrained Delaunay tetrahedralization of the surface).
 
-#include "proxy/circumsphere_set.h"
+#include "visproxy/proxy/circumsphere_set.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -19,12 +19,12 @@
 #include <string>
 #include <tuple>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
-#include "proxy/delaunay_cells.h"
-#include "proxy/surface_samples.h"
-#include "proxy/watertight_input.h"
-#include "verify/containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/delaunay_cells.h"
+#include "visproxy/proxy/surface_samples.h"
+#include "visproxy/proxy/watertight_input.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

@@ -3,7 +3,7 @@
 // flat inputs get Andrew's monotone chain in the plane, with exact 2D orientations on a
 // coordinate projection that keeps the plane's orientation.
 
-#include "proxy/convex_hull.h"
+#include "visproxy/proxy/convex_hull.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/errors.h"
-#include "proxy/hull_facets.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/proxy/hull_facets.h"
 
 namespace visproxy {
 namespace {

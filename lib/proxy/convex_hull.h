@@ -3,7 +3,7 @@
 
 #include <cstddef>
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

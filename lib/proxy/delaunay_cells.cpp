@@ -1,7 +1,7 @@
 // Delaunay tetrahedra of a point set (CGAL's incremental Delaunay triangulation, which is
 // the Bowyer-Watson insertion the occluding-spheres paper names, with exact predicates).
 
-#include "proxy/delaunay_cells.h"
+#include "visproxy/proxy/delaunay_cells.h"
 
 #include <CGAL/Delaunay_triangulation_3.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

@@ -1,4 +1,4 @@
-#include "proxy/hull_facets.h"
+#include "visproxy/proxy/hull_facets.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>

@@ -6,7 +6,7 @@
 // (G. Nemhauser, L. Wolsey, M. Fisher, 1978: within 1 - 1/e of the optimum; lazy
 // evaluation after M. Minoux, 1978).
 
-#include "proxy/inscribed_spheres.h"
+#include "visproxy/proxy/inscribed_spheres.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -22,13 +22,13 @@
 #include <string>
 #include <tuple>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "proxy/delaunay_cells.h"
-#include "proxy/surface_samples.h"
-#include "proxy/watertight_input.h"
-#include "verify/containment.h"
-#include "verify/sphere_containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/proxy/delaunay_cells.h"
+#include "visproxy/proxy/surface_samples.h"
+#include "visproxy/proxy/watertight_input.h"
+#include "visproxy/verify/containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {

@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "measure/proportion.h"
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,11 +1,11 @@
-#include "proxy/manifest.h"
+#include "visproxy/proxy/manifest.h"
 
 #include <system_error>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "mesh/sphere_set.h"
-#include "mesh/write_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/write_mesh.h"
 
 namespace visproxy {
 namespace {

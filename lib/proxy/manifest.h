@@ -7,8 +7,8 @@
 #include <span>
 #include <string>
 
-#include "mesh/triangle_mesh.h"
-#include "proxy/build_proxies.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
 
 namespace visproxy {
 

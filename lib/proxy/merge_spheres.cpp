@@ -3,7 +3,7 @@
 // distances D1 and D2, best partner per sphere from a spatial search structure, remembered
 // and updated only when needed) with the merge of section 3.3-3.4 (two_sphere_gssa.h).
 
-#include "proxy/merge_spheres.h"
+#include "visproxy/proxy/merge_spheres.h"
 
 #include <algorithm>
 #include <cassert>
@@ -16,7 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

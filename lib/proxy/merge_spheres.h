@@ -7,8 +7,8 @@
 #include <string_view>
 #include <vector>
 
-#include "mesh/sphere_set.h"
-#include "proxy/two_sphere_gssa.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/proxy/two_sphere_gssa.h"
 
 namespace visproxy {
 

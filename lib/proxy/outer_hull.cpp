@@ -28,7 +28,7 @@
 // meets the input and has every input component inside it. After the collapses, vertices
 // are moved towards the input under the same checks (the LP only ever grows the surface).
 
-#include "proxy/outer_hull.h"
+#include "visproxy/proxy/outer_hull.h"
 
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
@@ -51,11 +51,11 @@
 #include <unordered_map>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "mesh/mesh_topology.h"
-#include "proxy/alpha_wrap.h"
-#include "proxy/triangle_soup.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/alpha_wrap.h"
+#include "visproxy/proxy/triangle_soup.h"
 
 namespace visproxy {
 namespace {

@@ -1,11 +1,11 @@
-#include "proxy/proxy_spec.h"
+#include "visproxy/proxy/proxy_spec.h"
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <set>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

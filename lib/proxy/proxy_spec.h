@@ -24,8 +24,8 @@
 #include <string_view>
 #include <vector>
 
-#include "core/proxy_kind.h"
-#include "proxy/merge_spheres.h"
+#include "visproxy/core/proxy_kind.h"
+#include "visproxy/proxy/merge_spheres.h"
 
 namespace visproxy {
 

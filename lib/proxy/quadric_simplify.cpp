@@ -21,7 +21,7 @@
 // tie-breaking) against 0.009-0.010 here, although the greedy order is now exact only
 // within a pass.
 
-#include "proxy/quadric_simplify.h"
+#include "visproxy/proxy/quadric_simplify.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

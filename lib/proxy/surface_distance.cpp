@@ -4,7 +4,7 @@
 // (plus its vertices) are measured to their exact closest point on the other, found with
 // CGAL's AABB tree.
 
-#include "proxy/surface_distance.h"
+#include "visproxy/proxy/surface_distance.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -1,11 +1,11 @@
-#include "proxy/surface_samples.h"
+#include "visproxy/proxy/surface_samples.h"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
-#include "core/random.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "proxy/triangle_soup.h"
+#include "visproxy/proxy/triangle_soup.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 

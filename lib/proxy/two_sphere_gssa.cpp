@@ -5,7 +5,7 @@
 // hitting a body K is the mean area of K's shadow over directions (times a constant), and
 // the shadow of two balls is two discs, whose union has a closed-form area.
 
-#include "proxy/two_sphere_gssa.h"
+#include "visproxy/proxy/two_sphere_gssa.h"
 
 #include <algorithm>
 #include <array>

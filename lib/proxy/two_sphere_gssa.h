@@ -7,7 +7,7 @@
 // Every function takes the larger radius R, the smaller r (0 <= r <= R) and the distance d
 // between the centres (d >= 0), in any one length unit; areas come back in its square.
 
-#include "mesh/sphere_set.h"
+#include "visproxy/mesh/sphere_set.h"
 
 namespace visproxy {
 

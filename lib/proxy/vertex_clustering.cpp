@@ -8,7 +8,7 @@
 // solved with a pseudo-inverse about the cell's area-weighted mean, so that flat and
 // ridge-like cells stay well defined.
 
-#include "proxy/vertex_clustering.h"
+#include "visproxy/proxy/vertex_clustering.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

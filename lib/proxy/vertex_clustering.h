@@ -2,7 +2,7 @@
 // Vertex-clustering decimation on a uniform grid: a *general* proxy whose error is bounded
 // by the cell size.
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

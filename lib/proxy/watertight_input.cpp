@@ -1,10 +1,10 @@
-#include "proxy/watertight_input.h"
+#include "visproxy/proxy/watertight_input.h"
 
 #include <algorithm>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
 
 namespace visproxy {
 

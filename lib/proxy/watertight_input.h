@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "inspect/mesh_report.h"
+#include "visproxy/inspect/mesh_report.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "render/image.h"
+#include "visproxy/render/image.h"
 
 #include <IexBaseExc.h>
 #include <ImfChannelList.h>
@@ -16,8 +16,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "core/errors.h"
-#include "core/files.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
 
 namespace visproxy {
 namespace {

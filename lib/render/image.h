@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "scene/scene.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy {
 

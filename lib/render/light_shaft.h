@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
-#include "scene/scene.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy {
 

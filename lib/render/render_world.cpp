@@ -1,4 +1,4 @@
-#include "render/render_world.h"
+#include "visproxy/render/render_world.h"
 
 #include <Eigen/SVD>
 
@@ -7,10 +7,10 @@
 #include <limits>
 #include <map>
 
-#include "core/errors.h"
-#include "trace/convex_polytope.h"
-#include "trace/embree_support.h"
-#include "verify/containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/trace/convex_polytope.h"
+#include "visproxy/trace/embree_support.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {
@@ -620,7 +620,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     std::vector<Sphere> occluders;
     if (p.stochastic)
       for (const Sphere& ball : p.stochastic->spheres) occluders.push_back({instance.transform * ball.center, ball.radius * scales(0)});
-    w.occluder_clusters.push_back(cluster_spheres(occluders, occluder_cluster_size(occluders.size())));
+    w.occluder_clusters.push_back(cluster_spheres(occluders, kOccluderClusterSize, kOccluderClusterGroup));
     w.occluder_spheres.push_back(std::move(occluders));
     w.stochastic_kinds.push_back(kind);
 
@@ -758,10 +758,6 @@ const std::vector<SphereCluster>& RenderWorld::occluder_clusters(std::size_t ins
   return impl_->occluder_clusters[instance];
 }
 
-std::size_t occluder_cluster_size(std::size_t spheres) {
-  const auto root = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(spheres))));
-  return std::max<std::size_t>(32, (root + 7) / 8 * 8);
-}
 
 bool RenderWorld::proxy_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->blocked(impl_->proxy, from, to, filter);

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "core/proxy_kind.h"
-#include "mesh/sphere_set.h"
-#include "scene/scene.h"
-#include "trace/counting_bvh.h"
+#include "visproxy/core/proxy_kind.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/scene/scene.h"
+#include "visproxy/trace/counting_bvh.h"
 
 namespace visproxy {
 
@@ -63,10 +63,11 @@ struct InstanceFilter {
 /// The mask bit of an instance (bit i % 31).
 unsigned instance_bit(std::size_t instance);
 
-/// The cluster size RenderWorld uses for an instance's occluder balls: 32, or ceil(sqrt(n))
-/// rounded up to a multiple of 8 when that is larger (measured on the armadillo room with
-/// 100 and 1000 balls: 32 beat 16 and 64).
-std::size_t occluder_cluster_size(std::size_t spheres);
+/// How RenderWorld clusters an instance's occluder balls (cluster_spheres): clusters of at
+/// most 32, headed 4 at a time by a bound of theirs (measured on the armadillo room with 100
+/// and 1000 balls: faster than one level of 16, 32 or 64, and than clusters of 8 headed 4
+/// at a time).
+inline constexpr std::size_t kOccluderClusterSize = 32, kOccluderClusterGroup = 4;
 
 struct RenderWorldOptions {
   /// Shadow queries run through CountingBvh (our traversal of Embree-built BVHs,
@@ -161,8 +162,8 @@ class RenderWorld {
   /// else empty: the occluders of `spheres` visibility.
   const std::vector<Sphere>& occluder_spheres(std::size_t instance) const;
   /// occluder_spheres() in clusters of nearby balls (cluster_spheres() with
-  /// occluder_cluster_size()), each with a ball holding them: occluder disks reject a
-  /// cluster's balls at once for segments outside its bound's cone.
+  /// kOccluderClusterSize and kOccluderClusterGroup), each with a ball holding them:
+  /// occluder disks reject a cluster's balls at once for segments outside its bound's cone.
   const std::vector<SphereCluster>& occluder_clusters(std::size_t instance) const;
 
   /// Whether any instance has a usable inside proxy (else inside_blocks is always false).

@@ -1,11 +1,11 @@
 // The render loop (tiles, passes, per-pixel streams, the result) shared by every
 // integrator and visibility strategy.
 
-#include "render/renderer.h"
+#include "visproxy/render/renderer.h"
 
-#include "core/errors.h"
-#include "render/integrators/integrator.h"
-#include "render/visibility/visibility.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/render/integrators/integrator.h"
+#include "visproxy/render/visibility/visibility.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>

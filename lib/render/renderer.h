@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
-#include "estimator/probabilities.h"
-#include "render/image.h"
-#include "render/render_world.h"
-#include "render/virtual_point_lights.h"
+#include "visproxy/estimator/probabilities.h"
+#include "visproxy/render/image.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/render/virtual_point_lights.h"
 
 namespace visproxy {
 

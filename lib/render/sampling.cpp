@@ -1,4 +1,4 @@
-#include "render/sampling.h"
+#include "visproxy/render/sampling.h"
 
 #include <algorithm>
 #include <cmath>

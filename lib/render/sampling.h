@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "render/render_world.h"
-#include "scene/scene.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "render/virtual_point_lights.h"
+#include "visproxy/render/virtual_point_lights.h"
 
 #include <cmath>
 #include <numbers>

@@ -6,9 +6,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "render/render_world.h"
-#include "render/sampling.h"
-#include "scene/scene.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/render/sampling.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy {
 

@@ -1,10 +1,10 @@
-#include "scene/hairball.h"
+#include "visproxy/scene/hairball.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include "core/random.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 

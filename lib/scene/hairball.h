@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "scene/scene.h"
+#include "visproxy/scene/scene.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,11 +7,11 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "core/json_input.h"
-#include "mesh/read_mesh.h"
-#include "mesh/subdivide.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/core/json_input.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
 
 namespace visproxy {
 

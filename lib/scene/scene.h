@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,12 +1,12 @@
-#include "trace/convex_polytope.h"
+#include "visproxy/trace/convex_polytope.h"
 
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "mesh/mesh_topology.h"
-#include "trace/embree_support.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/trace/embree_support.h"
 
 namespace visproxy {
 

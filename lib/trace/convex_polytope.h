@@ -7,7 +7,7 @@
 #include <optional>
 #include <vector>
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,4 +1,4 @@
-#include "trace/counting_bvh.h"
+#include "visproxy/trace/counting_bvh.h"
 
 #include <embree3/rtcore.h>
 
@@ -7,8 +7,8 @@
 #include <limits>
 #include <vector>
 
-#include "core/errors.h"
-#include "trace/embree_support.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/trace/embree_support.h"
 
 namespace visproxy {
 namespace {

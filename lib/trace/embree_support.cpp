@@ -1,10 +1,10 @@
-#include "trace/embree_support.h"
+#include "visproxy/trace/embree_support.h"
 
 #include <cmath>
 #include <limits>
 #include <utility>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -10,8 +10,8 @@
 #include <span>
 #include <string>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

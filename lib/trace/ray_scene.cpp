@@ -1,11 +1,11 @@
-#include "trace/ray_scene.h"
+#include "visproxy/trace/ray_scene.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <limits>
 
-#include "trace/embree_support.h"
+#include "visproxy/trace/embree_support.h"
 
 namespace visproxy {
 

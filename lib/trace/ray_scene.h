@@ -9,8 +9,8 @@
 #include <span>
 #include <vector>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,6 +1,6 @@
 // Exact point location and surface containment (CGAL, exact predicates on doubles).
 
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -21,8 +21,8 @@
 #include <optional>
 #include <variant>
 
-#include "core/errors.h"
-#include "core/random.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 namespace {

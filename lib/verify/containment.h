@@ -15,8 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include "mesh/mesh_topology.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -1,7 +1,7 @@
 // Exact containment of balls in a closed mesh: centre by winding number, radius against
 // the exact distance to every nearby triangle (CGAL: filtered predicates, lazy exact kernel).
 
-#include "verify/sphere_containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
-#include "verify/containment.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

@@ -5,8 +5,8 @@
 #include <optional>
 #include <span>
 
-#include "mesh/sphere_set.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
 

@@ -8,13 +8,13 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_test_support.h"
-#include "core/files.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
-#include "mesh/sphere_set.h"
-#include "verify/containment.h"
-#include "verify/sphere_containment.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/verify/containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {

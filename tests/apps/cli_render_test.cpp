@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_test_support.h"
-#include "core/errors.h"
-#include "core/files.h"
-#include "render/image.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/render/image.h"
 #include "test_support.h"
 
 namespace visproxy {

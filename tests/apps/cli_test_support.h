@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/files.h"
+#include "visproxy/core/files.h"
 #include "schema_support.h"
 
 namespace visproxy::testing {

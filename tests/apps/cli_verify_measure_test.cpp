@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/cli_test_support.h"
-#include "core/files.h"
-#include "mesh/triangle_mesh.h"
-#include "mesh/read_mesh.h"
-#include "mesh/write_mesh.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
 

@@ -1,10 +1,10 @@
-#include "core/files.h"
+#include "visproxy/core/files.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 #include "test_support.h"
 
 namespace visproxy {

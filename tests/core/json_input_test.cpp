@@ -1,10 +1,10 @@
-#include "core/json_input.h"
+#include "visproxy/core/json_input.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

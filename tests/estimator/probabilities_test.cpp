@@ -1,4 +1,4 @@
-#include "estimator/probabilities.h"
+#include "visproxy/estimator/probabilities.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/random.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 namespace {

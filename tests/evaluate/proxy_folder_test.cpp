@@ -1,12 +1,12 @@
-#include "evaluate/proxy_folder.h"
+#include "visproxy/evaluate/proxy_folder.h"
 
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/errors.h"
-#include "core/files.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
 #include "test_support.h"
 
 namespace visproxy {

@@ -15,8 +15,8 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 
 namespace {
 

@@ -25,11 +25,11 @@
 #include <string>
 #include <string_view>
 
-#include "core/errors.h"
-#include "evaluate/proxy_folder.h"
-#include "mesh/sphere_set.h"
-#include "render/image.h"
-#include "scene/scene.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/render/image.h"
+#include "visproxy/scene/scene.h"
 
 namespace {
 

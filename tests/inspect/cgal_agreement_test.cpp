@@ -7,8 +7,8 @@
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
 
-#include "inspect/exact_checks.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/inspect/exact_checks.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {

@@ -1,4 +1,4 @@
-#include "inspect/exact_checks.h"
+#include "visproxy/inspect/exact_checks.h"
 
 #include <gtest/gtest.h>
 

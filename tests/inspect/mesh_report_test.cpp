@@ -1,10 +1,10 @@
-#include "inspect/mesh_report.h"
+#include "visproxy/inspect/mesh_report.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "core/files.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
 

@@ -1,13 +1,13 @@
-#include "measure/proxy_measurement.h"
+#include "visproxy/measure/proxy_measurement.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
-#include "mesh/read_mesh.h"
-#include "mesh/sphere_set.h"
-#include "measure/random_lines.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/measure/random_lines.h"
 #include "test_meshes.h"
 
 namespace visproxy {

@@ -1,13 +1,13 @@
-#include "measure/random_lines.h"
+#include "visproxy/measure/random_lines.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
-#include "measure/proportion.h"
+#include "visproxy/measure/proportion.h"
 #include "test_meshes.h"
-#include "trace/ray_scene.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 namespace {

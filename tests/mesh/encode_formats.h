@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy::testing {
 

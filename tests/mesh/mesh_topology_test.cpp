@@ -1,9 +1,9 @@
-#include "mesh/mesh_topology.h"
+#include "visproxy/mesh/mesh_topology.h"
 
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {

@@ -1,10 +1,10 @@
-#include "mesh/read_mesh.h"
+#include "visproxy/mesh/read_mesh.h"
 
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 #include "mesh/encode_formats.h"
-#include "mesh/write_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {

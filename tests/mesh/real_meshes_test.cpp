@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include "mesh/read_mesh.h"
-#include "mesh/write_mesh.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
 

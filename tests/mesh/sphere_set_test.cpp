@@ -1,4 +1,4 @@
-#include "mesh/sphere_set.h"
+#include "visproxy/mesh/sphere_set.h"
 
 #include <gtest/gtest.h>
 
@@ -7,10 +7,10 @@
 #include <tuple>
 #include <numbers>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "core/files.h"
-#include "mesh/mesh_topology.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/mesh_topology.h"
 #include "test_support.h"
 
 namespace visproxy {
@@ -106,8 +106,8 @@ TEST(SphereUnionBoundaryMesh, DropsTrianglesBuriedInOtherBalls) {
 }
 
 // Clusters partition the set into runs of at most `leaf`, each bound holds its balls (also
-// far from the origin, with equal balls and with balls of radius 0), and the order is the
-// same on every call.
+// far from the origin, with equal balls and with balls of radius 0), heads cover the runs of
+// the clusters they head, and the order is the same on every call.
 TEST(ClusterSpheres, PartitionsTheSetAndBoundsHoldTheirBalls) {
   Random random(77);
   for (int trial = 0; trial < 200; ++trial) {
@@ -118,17 +118,29 @@ TEST(ClusterSpheres, PartitionsTheSetAndBoundsHoldTheirBalls) {
       const Vertex c = Vertex::Constant(far) + Vertex(random.uniform(), random.uniform(), random.uniform()) * 10;
       balls.push_back({trial % 5 == 0 ? Vertex::Constant(far) : c, trial % 7 == 0 ? 0.0 : random.uniform()});
     }
-    const std::size_t leaf = 1 + random.below(40);
+    const std::size_t leaf = 1 + random.below(40), group = trial % 3 == 0 ? 0 : 2 + random.below(5);
     std::vector<Sphere> ordered = balls, again = balls;
-    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf);
-    EXPECT_EQ(cluster_spheres(again, leaf).size(), clusters.size());
+    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf, group);
+    EXPECT_EQ(cluster_spheres(again, leaf, group).size(), clusters.size());
     EXPECT_EQ(again, ordered);
     std::uint32_t next = 0;
-    for (const SphereCluster& cluster : clusters) {
-      EXPECT_EQ(cluster.begin, next);
-      EXPECT_GT(cluster.end, cluster.begin);
-      EXPECT_LE(cluster.end - cluster.begin, leaf);
-      next = cluster.end;
+    std::size_t heads = 0;
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+      const SphereCluster& cluster = clusters[c];
+      if (cluster.children > 0) {
+        // A head: followed by its clusters, whose runs make up its own.
+        ++heads;
+        ASSERT_LE(c + cluster.children, clusters.size() - 1);
+        EXPECT_LE(cluster.children, group);
+        EXPECT_EQ(cluster.begin, clusters[c + 1].begin);
+        EXPECT_EQ(cluster.end, clusters[c + cluster.children].end);
+        for (std::size_t k = 1; k <= cluster.children; ++k) EXPECT_EQ(clusters[c + k].children, 0u);
+      } else {
+        EXPECT_EQ(cluster.begin, next);
+        EXPECT_GT(cluster.end, cluster.begin);
+        EXPECT_LE(cluster.end - cluster.begin, leaf);
+        next = cluster.end;
+      }
       for (std::uint32_t i = cluster.begin; i < cluster.end; ++i) {
         // Checked in long double, finer than the double the bound was computed in.
         const auto d = [](double a, double b) { return static_cast<long double>(a) - static_cast<long double>(b); };
@@ -139,6 +151,8 @@ TEST(ClusterSpheres, PartitionsTheSetAndBoundsHoldTheirBalls) {
       }
     }
     EXPECT_EQ(next, ordered.size());
+    if (group < 2) EXPECT_EQ(heads, 0u);
+    else if (!ordered.empty()) EXPECT_GT(heads, 0u);
     // The same balls, reordered.
     auto less = [](const Sphere& a, const Sphere& b) {
       return std::tie(a.center.x(), a.center.y(), a.center.z(), a.radius) < std::tie(b.center.x(), b.center.y(), b.center.z(), b.radius);

@@ -1,12 +1,12 @@
 // subdivide_midpoint: counts, watertightness, orientation and shape.
 
-#include "mesh/subdivide.h"
+#include "visproxy/mesh/subdivide.h"
 
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {

@@ -1,13 +1,13 @@
-#include "mesh/write_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
-#include "core/errors.h"
-#include "core/files.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
 

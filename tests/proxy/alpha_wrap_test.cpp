@@ -1,4 +1,4 @@
-#include "proxy/alpha_wrap.h"
+#include "visproxy/proxy/alpha_wrap.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "proxy/awkward_meshes.h"
 #include "proxy/outside_proxy_checks.h"
 #include "test_meshes.h"

@@ -1,7 +1,7 @@
 #pragma once
 // Inputs that break naive proxy builders, built in code.
 
-#include "mesh/triangle_mesh.h"
+#include "visproxy/mesh/triangle_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy::testing {

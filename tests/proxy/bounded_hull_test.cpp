@@ -1,4 +1,4 @@
-#include "proxy/bounded_hull.h"
+#include "visproxy/proxy/bounded_hull.h"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <cstdio>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "proxy/convex_hull.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/convex_hull.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"

@@ -1,4 +1,4 @@
-#include "proxy/bounding_boxes.h"
+#include "visproxy/proxy/bounding_boxes.h"
 
 #include <gtest/gtest.h>
 
@@ -6,12 +6,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/errors.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

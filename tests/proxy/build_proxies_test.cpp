@@ -2,17 +2,17 @@
 // kind promises: outside proxies contain every input vertex (exact), counts respect N,
 // no degenerate triangles.
 
-#include "proxy/build_proxies.h"
+#include "visproxy/proxy/build_proxies.h"
 
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
-#include "inspect/exact_checks.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/inspect/exact_checks.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 #include "test_support.h"
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

@@ -1,16 +1,16 @@
-#include "proxy/circumsphere_set.h"
+#include "visproxy/proxy/circumsphere_set.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "proxy/awkward_meshes.h"
-#include "proxy/delaunay_cells.h"
+#include "visproxy/proxy/delaunay_cells.h"
 #include "test_meshes.h"
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

@@ -1,11 +1,11 @@
-#include "proxy/convex_hull.h"
+#include "visproxy/proxy/convex_hull.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"

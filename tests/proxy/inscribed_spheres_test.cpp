@@ -1,18 +1,18 @@
-#include "proxy/inscribed_spheres.h"
+#include "visproxy/proxy/inscribed_spheres.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "proxy/awkward_meshes.h"
 #include "test_meshes.h"
 #include "test_support.h"
-#include "mesh/mesh_topology.h"
-#include "verify/containment.h"
-#include "verify/sphere_containment.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/verify/containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {

@@ -1,4 +1,4 @@
-#include "proxy/merge_spheres.h"
+#include "visproxy/proxy/merge_spheres.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <tuple>
 #include <vector>
 
-#include "core/errors.h"
-#include "core/random.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
 
 namespace visproxy {
 namespace {

@@ -1,4 +1,4 @@
-#include "proxy/outer_hull.h"
+#include "visproxy/proxy/outer_hull.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,10 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "mesh/read_mesh.h"
-#include "proxy/alpha_wrap.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/alpha_wrap.h"
 #include "proxy/awkward_meshes.h"
 #include "proxy/outside_proxy_checks.h"
 #include "test_meshes.h"

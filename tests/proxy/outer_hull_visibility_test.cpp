@@ -6,14 +6,14 @@
 #include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 
-#include "measure/proportion.h"
-#include "measure/random_lines.h"
-#include "mesh/read_mesh.h"
-#include "proxy/outer_hull.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/outer_hull.h"
 #include "proxy/outside_proxy_checks.h"
 #include "test_meshes.h"
 #include "test_support.h"
-#include "trace/ray_scene.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 namespace {

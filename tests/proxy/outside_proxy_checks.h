@@ -17,9 +17,9 @@
 #include <array>
 #include <vector>
 
-#include "inspect/exact_checks.h"
-#include "mesh/mesh_topology.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/inspect/exact_checks.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy::testing {
 

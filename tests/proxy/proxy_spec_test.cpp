@@ -1,8 +1,8 @@
-#include "proxy/proxy_spec.h"
+#include "visproxy/proxy/proxy_spec.h"
 
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
 namespace visproxy {
 namespace {

@@ -9,8 +9,8 @@
 #include <set>
 #include <vector>
 
-#include "inspect/exact_checks.h"
-#include "mesh/triangle_mesh.h"
+#include "visproxy/inspect/exact_checks.h"
+#include "visproxy/mesh/triangle_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy::testing {

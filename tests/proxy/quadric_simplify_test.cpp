@@ -1,6 +1,6 @@
 // simplify_quadric: budget, clean output and error on real and awkward meshes.
 
-#include "proxy/quadric_simplify.h"
+#include "visproxy/proxy/quadric_simplify.h"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <limits>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "proxy/surface_distance.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/surface_distance.h"
 #include "proxy_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"

@@ -8,10 +8,10 @@
 
 #include <vector>
 
-#include "measure/proxy_measurement.h"
-#include "measure/random_lines.h"
-#include "proxy/merge_spheres.h"
-#include "trace/ray_scene.h"
+#include "visproxy/measure/proxy_measurement.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/proxy/merge_spheres.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy::testing {
 

@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include "mesh/read_mesh.h"
-#include "proxy/circumsphere_set.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/circumsphere_set.h"
 #include "proxy/sphere_gssa_checks.h"
 #include "test_meshes.h"
 #include "test_support.h"

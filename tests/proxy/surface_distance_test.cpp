@@ -1,13 +1,13 @@
 // sampled_hausdorff_distance against distances known exactly.
 
-#include "proxy/surface_distance.h"
+#include "visproxy/proxy/surface_distance.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "proxy_test_support.h"
 #include "test_meshes.h"
 

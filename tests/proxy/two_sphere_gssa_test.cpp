@@ -1,4 +1,4 @@
-#include "proxy/two_sphere_gssa.h"
+#include "visproxy/proxy/two_sphere_gssa.h"
 
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include <numbers>
 #include <vector>
 
-#include "measure/proportion.h"
-#include "measure/random_lines.h"
-#include "trace/ray_scene.h"
+#include "visproxy/measure/proportion.h"
+#include "visproxy/measure/random_lines.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 namespace {

@@ -1,6 +1,6 @@
 // cluster_vertices: displacement bound, clean output and grid behaviour.
 
-#include "proxy/vertex_clustering.h"
+#include "visproxy/proxy/vertex_clustering.h"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <limits>
 #include <string>
 
-#include "core/errors.h"
-#include "mesh/read_mesh.h"
-#include "proxy/surface_distance.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/surface_distance.h"
 #include "proxy_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"

@@ -1,4 +1,4 @@
-#include "render/image.h"
+#include "visproxy/render/image.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <limits>
 #include <string>
 
-#include "core/errors.h"
-#include "core/files.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/files.h"
 #include "test_support.h"
 
 namespace visproxy {

@@ -5,12 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <cstdio>
 
-#include "core/random.h"
-#include "mesh/sphere_set.h"
-#include "render/visibility/occluder_disks.h"
-#include "trace/embree_support.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/render/visibility/occluder_disks.h"
+#include "visproxy/trace/embree_support.h"
 
 namespace visproxy {
 namespace {
@@ -19,6 +20,17 @@ Vertex random_unit(Random& random) {
   for (;;) {
     const Vertex v(2 * random.uniform() - 1, 2 * random.uniform() - 1, 2 * random.uniform() - 1);
     if (v.squaredNorm() > 1e-6 && v.squaredNorm() <= 1) return v.normalized();
+  }
+}
+
+// The group form of occludes() of each of `disks` gives `answers` for `ends`.
+void expect_group_answers(std::initializer_list<const OccluderDisks*> disks, const std::vector<Vertex>& ends,
+                          const std::vector<std::uint8_t>& answers, int point) {
+  for (const OccluderDisks* d : disks) {
+    std::vector<std::uint8_t> grouped(ends.size());
+    std::uint64_t tests = 0;
+    d->occludes(ends, grouped, tests);
+    EXPECT_EQ(grouped, answers) << "point " << point;
   }
 }
 
@@ -83,12 +95,7 @@ TEST(OccluderDisks, AgreeWithTheDefinitionOnRandomConfigurations) {
     }
     // The group forms, with and without the grid, give the single segments' answers: the
     // grid only narrows the disks compared.
-    std::vector<std::uint8_t> linear_group(ends.size()), grid_group(ends.size());
-    std::uint64_t group_tests = 0;
-    disks.occludes(ends, linear_group, group_tests);
-    grid.occludes(ends, grid_group, group_tests);
-    EXPECT_EQ(linear_group, answers) << "point " << p;
-    EXPECT_EQ(grid_group, answers) << "point " << p;
+    expect_group_answers({&disks, &grid}, ends, answers, p);
   }
   EXPECT_GT(occluded, checks / 5);
   EXPECT_LT(occluded, checks * 4 / 5);
@@ -196,8 +203,9 @@ TEST(OccluderDisks, EdgeCases) {
   EXPECT_FALSE(disks.occludes({0, 0, 0.85}, tests));  // the light before the kept ball's centre
 }
 
-// The clusters' bounds only skip work: with them, every segment gets the answer of testing
-// every disk, one at a time and in groups. The balls are made to defeat a careless bound:
+// The clusters' bounds only skip work: with them (one level, or clusters headed a few at a
+// time), every segment gets the answer of testing every disk, one at a time and in groups.
+// The balls are made to defeat a careless bound:
 // balls touching the inside of their cluster's bound (so that their cones touch the bound's
 // cone), ends aimed within 1e-6 radians of those balls' silhouettes, points inside a bound
 // and inside a ball, the self-shadowing heuristic, and everything 10^4 units from the origin.
@@ -224,9 +232,9 @@ TEST(OccluderDisks, ClustersGiveTheAnswersOfEveryDisk) {
     }
     if (p % 7 == 0) balls.push_back({x + 0.01 * random_unit(random), 0.05});  // holds x
     const bool heuristic = p % 4 == 1;
-    const std::size_t leaf = 1 + random.below(24);
+    const std::size_t leaf = 1 + random.below(24), group = p % 2 == 0 ? 0 : 2 + random.below(4);
     std::vector<Sphere> ordered = balls;
-    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf);
+    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf, group);
     OccluderDisks flat, clustered;
     flat.reset(x, n), clustered.reset(x, n);
     flat.add(balls, heuristic), clustered.add(ordered, clusters, heuristic);
@@ -261,12 +269,7 @@ TEST(OccluderDisks, ClustersGiveTheAnswersOfEveryDisk) {
       occluded += answer ? 1 : 0;
       ++checks;
     }
-    std::vector<std::uint8_t> flat_group(ends.size()), clustered_group(ends.size());
-    std::uint64_t group_tests = 0;
-    flat.occludes(ends, flat_group, group_tests);
-    clustered.occludes(ends, clustered_group, group_tests);
-    ASSERT_EQ(flat_group, answers) << "point " << p;
-    ASSERT_EQ(clustered_group, answers) << "point " << p;
+    expect_group_answers({&flat, &clustered}, ends, answers, p);
   }
   EXPECT_GT(occluded, checks / 5);
   EXPECT_LT(occluded, checks * 4 / 5);

@@ -3,8 +3,8 @@
 
 #include <utility>
 
-#include "render/renderer.h"
-#include "scene/scene.h"
+#include "visproxy/render/renderer.h"
+#include "visproxy/scene/scene.h"
 
 namespace visproxy::testing {
 

@@ -2,19 +2,19 @@
 // rooms, closed convex instances without proxies, unproved proxies, proxies that touch
 // their mesh, scenes far from the origin, and devices without ray masks.
 
-#include "render/render_world.h"
+#include "visproxy/render/render_world.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "core/random.h"
-#include "mesh/sphere_set.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/sphere_set.h"
 #include "render/render_test_scenes.h"
-#include "render/renderer.h"
-#include "verify/containment.h"
-#include "verify/sphere_containment.h"
+#include "visproxy/render/renderer.h"
+#include "visproxy/verify/containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 namespace visproxy {
 namespace {

@@ -1,4 +1,4 @@
-#include "render/renderer.h"
+#include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
 
 #include <gtest/gtest.h>
@@ -7,9 +7,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 
-#include "mesh/sphere_set.h"
+#include "visproxy/mesh/sphere_set.h"
 #include "test_support.h"
 
 namespace visproxy {

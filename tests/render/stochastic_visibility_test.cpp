@@ -7,12 +7,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "core/random.h"
-#include "mesh/sphere_set.h"
-#include "render/renderer.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
 #include "test_support.h"
-#include "trace/ray_scene.h"
+#include "visproxy/trace/ray_scene.h"
 
 namespace visproxy {
 namespace {

@@ -11,12 +11,12 @@
 #include <cstdio>
 #include <numbers>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "mesh/sphere_set.h"
-#include "render/renderer.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
-#include "render/virtual_point_lights.h"
+#include "visproxy/render/virtual_point_lights.h"
 
 namespace visproxy {
 namespace {

@@ -1,4 +1,4 @@
-#include "scene/scene.h"
+#include "visproxy/scene/scene.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/errors.h"
+#include "visproxy/core/errors.h"
 #include "schema_support.h"
 #include "test_support.h"
 

@@ -1,11 +1,11 @@
-#include "trace/convex_polytope.h"
+#include "visproxy/trace/convex_polytope.h"
 
 #include <gtest/gtest.h>
 
 #include <numbers>
 
-#include "core/random.h"
-#include "mesh/sphere_set.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/sphere_set.h"
 #include "test_support.h"
 
 namespace visproxy {

@@ -1,10 +1,10 @@
-#include "trace/ray_scene.h"
+#include "visproxy/trace/ray_scene.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "core/random.h"
+#include "visproxy/core/random.h"
 #include "test_meshes.h"
 
 namespace visproxy {

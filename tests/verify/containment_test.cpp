@@ -1,13 +1,13 @@
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
 
 namespace visproxy {

@@ -1,4 +1,4 @@
-#include "verify/sphere_containment.h"
+#include "visproxy/verify/sphere_containment.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -10,11 +10,11 @@
 #include <cmath>
 #include <limits>
 
-#include "core/errors.h"
-#include "core/random.h"
-#include "mesh/read_mesh.h"
+#include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
+#include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
-#include "verify/containment.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {

@@ -1,7 +1,7 @@
 // Direct illumination from area lights on Lambertian surfaces (Billen et al. eq. 21):
 // M points on the lights by area, each segment's visibility from the strategy.
 
-#include "render/integrators/integrator.h"
+#include "visproxy/render/integrators/integrator.h"
 
 namespace visproxy {
 namespace {

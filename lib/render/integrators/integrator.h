@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "render/visibility/visibility.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 

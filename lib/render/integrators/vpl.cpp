@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "render/integrators/integrator.h"
-#include "render/virtual_point_lights.h"
+#include "visproxy/render/integrators/integrator.h"
+#include "visproxy/render/virtual_point_lights.h"
 
 namespace visproxy {
 namespace {

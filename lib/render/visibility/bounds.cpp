@@ -6,9 +6,9 @@
 #include <span>
 #include <vector>
 
-#include "render/light_shaft.h"
-#include "render/visibility/visibility.h"
-#include "trace/embree_support.h"
+#include "visproxy/render/light_shaft.h"
+#include "visproxy/render/visibility/visibility.h"
+#include "visproxy/trace/embree_support.h"
 
 namespace visproxy {
 namespace {

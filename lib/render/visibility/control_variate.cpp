@@ -4,8 +4,8 @@
 #include <span>
 #include <vector>
 
-#include "render/visibility/occluder_disks.h"
-#include "render/visibility/visibility.h"
+#include "visproxy/render/visibility/occluder_disks.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 

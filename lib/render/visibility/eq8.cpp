@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "render/visibility/visibility.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 

@@ -1,14 +1,14 @@
 // The `spheres` visibility strategy: each instance's sphere-set proxy as occluder disks,
 // instances without one (and, with --self-shadow exact, the own instance) traced exactly.
 
-#include "render/visibility/occluder_disks.h"
+#include "visproxy/render/visibility/occluder_disks.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 
-#include "render/visibility/visibility.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 
@@ -81,18 +81,25 @@ void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self
   disks_.pad_to(kDiskBlock);
   count_ += group.count;
   if (bound) {
-    // The bound's cone, its radius grown by 2^-16 of its distance: at least 2^-16 radians
-    // wider on every side than the cones of the balls it holds, while the single-precision
-    // comparisons err by about 1e-6 radians.
-    const Vertex v = bound->center - x_;
-    const double t = v.norm(), radius = bound->radius + std::ldexp(t, -16);
-    if (t > radius) {
-      const Vertex u = v / t;
-      group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
-      group.cos = static_cast<float>(std::sqrt(t * t - radius * radius) / t);
-    }
+    const DiskGroup cone = bound_cone(*bound);
+    group.ux = cone.ux, group.uy = cone.uy, group.uz = cone.uz, group.cos = cone.cos;
   }
   groups_.push_back(group);
+}
+
+DiskGroup OccluderDisks::bound_cone(const Sphere& bound) const {
+  // The bound's cone, its radius grown by 2^-16 of its distance: at least 2^-16 radians
+  // wider on every side than the cones of the balls it holds, while the single-precision
+  // comparisons err by about 1e-6 radians.
+  DiskGroup group;
+  const Vertex v = bound.center - x_;
+  const double t = v.norm(), radius = bound.radius + std::ldexp(t, -16);
+  if (t > radius) {
+    const Vertex u = v / t;
+    group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
+    group.cos = static_cast<float>(std::sqrt(t * t - radius * radius) / t);
+  }
+  return group;
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
@@ -100,10 +107,28 @@ void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic)
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic) {
-  for (const SphereCluster& cluster : clusters) {
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const SphereCluster& cluster = clusters[c];
     // Every ball of a bound behind the tangent plane is behind it too.
-    if (n_.dot(cluster.bound.center - x_) <= -cluster.bound.radius) continue;
-    add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound);
+    if (n_.dot(cluster.bound.center - x_) <= -cluster.bound.radius) {
+      c += cluster.children;
+      continue;
+    }
+    if (cluster.children == 0) {
+      add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound);
+      continue;
+    }
+    // A head: its cone, then the groups of the clusters it heads that keep a ball.
+    const std::size_t head = groups_.size();
+    DiskGroup header = bound_cone(cluster.bound);
+    groups_.push_back(header);
+    for (std::size_t k = 0; k < cluster.children; ++k) {
+      const SphereCluster& child = clusters[c + 1 + k];
+      add_balls(spheres.data() + child.begin, spheres.data() + child.end, self_heuristic, &child.bound);
+    }
+    c += cluster.children;
+    groups_[head].span = static_cast<std::uint32_t>(groups_.size() - head - 1);
+    if (groups_[head].span == 0) groups_.pop_back();
   }
 }
 
@@ -193,11 +218,16 @@ bool OccluderDisks::occludes(const Vertex& end, std::uint64_t& tests) const {
   const float zf = segment_length(w);
   if (!(zf > 0)) return false;
   const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z());
-  for (const DiskGroup& group : groups_) {
+  for (std::size_t g = 0; g < groups_.size(); ++g) {
+    const DiskGroup& group = groups_[g];
     if (group.cos >= -1) {
       ++tests;
-      if (!(dx * group.ux + dy * group.uy + dz * group.uz > group.cos * zf)) continue;
+      if (!(dx * group.ux + dy * group.uy + dz * group.uz > group.cos * zf)) {
+        g += group.span;
+        continue;
+      }
     }
+    if (group.span > 0) continue;
     tests += group.count;
     const std::size_t b = group.begin, n = (group.count + kDiskBlock - 1) / kDiskBlock * kDiskBlock;
     if (any_disk_occludes(disks_.ux.data() + b, disks_.uy.data() + b, disks_.uz.data() + b, disks_.cos.data() + b, disks_.t.data() + b, n,
@@ -359,8 +389,12 @@ __attribute__((target_clones("avx2", "default"))) std::uint64_t disk_groups_hide
       if (group.cos >= -1) {
         tests += lanes;
         const Ints in_cone = x * group.ux + y * group.uy + w * group.uz > group.cos * d;
-        if (!any_lane(in_cone & ~any)) continue;
+        if (!any_lane(in_cone & ~any)) {
+          g += group.span;
+          continue;
+        }
       }
+      if (group.span > 0) continue;
       tests += lanes * group.count;
       for (std::size_t j = group.begin, end = group.begin + group.count; j < end; ++j)
         any |= (x * ux[j] + y * uy[j] + w * uz[j] > cos_gamma[j] * d) & (t[j] < d);

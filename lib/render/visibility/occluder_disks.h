@@ -11,17 +11,18 @@
 #include <span>
 #include <vector>
 
-#include "render/render_world.h"
-#include "render/renderer.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/render/renderer.h"
 
 namespace visproxy {
 
 /// A run of disks [begin, begin + count), then padding, with the cone of a bound that
 /// holds their balls (cos < -1: every direction, for no bound or a point inside it), as
-/// OccluderDisks keeps them.
+/// OccluderDisks keeps them. A group with span > 0 has no disks of its own: it heads the
+/// next `span` groups, and its bound holds all their balls.
 struct DiskGroup {
   float ux = 0, uy = 0, uz = 1, cos = -2;
-  std::uint32_t begin = 0, count = 0;
+  std::uint32_t begin = 0, count = 0, span = 0;
 };
 
 /// The balls of a set as occluder disks from one point, in structure-of-arrays form
@@ -42,7 +43,8 @@ class OccluderDisks {
   /// every segment longer than t.
   void add(const std::vector<Sphere>& spheres, bool self_heuristic);
   /// The same, one group per cluster (clusters over `spheres` as cluster_spheres() returns
-  /// them); a cluster whose bound lies behind the tangent plane is left out whole.
+  /// them, heads of clusters included); a cluster whose bound lies behind the tangent plane
+  /// is left out whole, with the clusters it heads.
   void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic);
   /// Call after the last add() and before occludes(). With `grid`, also sorts the disks
   /// into a grid over the stereographic projection of the hemisphere around n (a spherical
@@ -77,6 +79,7 @@ class OccluderDisks {
     }
   };
   void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound);
+  DiskGroup bound_cone(const Sphere& bound) const;
 
   Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;

@@ -1,4 +1,4 @@
-#include "render/visibility/visibility.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 

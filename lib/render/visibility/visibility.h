@@ -9,9 +9,9 @@
 #include <span>
 #include <vector>
 
-#include "render/render_world.h"
-#include "render/renderer.h"
-#include "render/sampling.h"
+#include "visproxy/render/render_world.h"
+#include "visproxy/render/renderer.h"
+#include "visproxy/render/sampling.h"
 
 namespace visproxy {
 

@@ -1,0 +1,80 @@
+# Run by ctest (tests/CMakeLists.txt): the installed package works for a consumer.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DMESH=... -DCXX=... -DGENERATOR=... -P test_package.cmake
+
+function(run what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE code OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT code EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${code}):\n${out}\n${err}")
+  endif()
+  set(output "${out}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE "${WORK_DIR}")
+set(prefix "${WORK_DIR}/prefix")
+
+# 1. Install into a fresh prefix.
+run("cmake --install" ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}")
+foreach(path lib/libvisproxy.so bin/visproxy lib/cmake/visproxy/visproxyConfig.cmake
+        lib/cmake/visproxy/visproxyConfigVersion.cmake lib/pkgconfig/visproxy.pc
+        include/visproxy/render/renderer.h share/visproxy/schemas/scene.schema.json)
+  if(NOT EXISTS "${prefix}/${path}")
+    message(FATAL_ERROR "the install prefix lacks ${path}")
+  endif()
+endforeach()
+
+# 2. No installed header includes a private dependency, and every include of a visproxy
+# header resolves inside the prefix.
+file(GLOB_RECURSE headers "${prefix}/include/visproxy/*.h")
+list(LENGTH headers count)
+if(count LESS 50)
+  message(FATAL_ERROR "only ${count} headers installed")
+endif()
+foreach(header ${headers})
+  file(STRINGS "${header}" lines REGEX "^[ \t]*#[ \t]*include")
+  foreach(line ${lines})
+    if(line MATCHES "<(CGAL|embree3|tbb|oneapi|OpenMesh|tetgen)[/.>]")
+      message(FATAL_ERROR "${header} includes a private dependency: ${line}")
+    endif()
+    if(line MATCHES "\"(visproxy/[^\"]+)\"" AND NOT EXISTS "${prefix}/include/${CMAKE_MATCH_1}")
+      message(FATAL_ERROR "${header} includes ${CMAKE_MATCH_1}, which is not installed")
+    endif()
+  endforeach()
+endforeach()
+
+# 3. The CLI runs from the prefix.
+run("installed visproxy --version" "${prefix}/bin/visproxy" --version)
+if(NOT output MATCHES "0\\.2\\.")
+  message(FATAL_ERROR "installed visproxy --version printed: ${output}")
+endif()
+
+# 4. A CMake consumer: find_package(visproxy 0.2 REQUIRED) and visproxy::visproxy.
+run("configuring the consumer" ${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/package/consumer" -B "${WORK_DIR}/consumer"
+    -G "${GENERATOR}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER=${CXX})
+run("building the consumer" ${CMAKE_COMMAND} --build "${WORK_DIR}/consumer")
+run("running the consumer" "${WORK_DIR}/consumer/consumer" "${MESH}")
+message(STATUS "consumer: ${output}")
+if(NOT output MATCHES "contains the mesh: proved" OR NOT output MATCHES "visproxy 0\\.2\\.")
+  message(FATAL_ERROR "the consumer printed: ${output}")
+endif()
+
+# 5. A version that does not match is refused.
+file(WRITE "${WORK_DIR}/wrong/CMakeLists.txt"
+     "cmake_minimum_required(VERSION 3.25)\nproject(wrong LANGUAGES CXX)\nfind_package(visproxy 0.3 REQUIRED)\n")
+execute_process(COMMAND ${CMAKE_COMMAND} -S "${WORK_DIR}/wrong" -B "${WORK_DIR}/wrong/build" -G "${GENERATOR}"
+                -DCMAKE_PREFIX_PATH=${prefix} RESULT_VARIABLE code OUTPUT_QUIET ERROR_QUIET)
+if(code EQUAL 0)
+  message(FATAL_ERROR "find_package(visproxy 0.3) accepted version 0.2")
+endif()
+
+# 6. pkg-config: the same program compiled with `pkg-config --cflags --libs visproxy`.
+find_program(PKG_CONFIG pkg-config REQUIRED)
+set(ENV{PKG_CONFIG_PATH} "${prefix}/lib/pkgconfig")
+run("pkg-config" ${PKG_CONFIG} --cflags --libs visproxy)
+string(STRIP "${output}" flags)
+separate_arguments(flags UNIX_COMMAND "${flags}")
+run("compiling with pkg-config's flags" ${CXX} -O1 "${SOURCE_DIR}/tests/package/consumer/main.cpp" ${flags}
+    "-Wl,-rpath,${prefix}/lib" -o "${WORK_DIR}/consumer-pc")
+run("running the pkg-config build" "${WORK_DIR}/consumer-pc" "${MESH}")
+if(NOT output MATCHES "contains the mesh: proved")
+  message(FATAL_ERROR "the pkg-config build printed: ${output}")
+endif()
