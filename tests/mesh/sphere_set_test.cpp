@@ -144,15 +144,18 @@ TEST(ClusterSpheres, PartitionsTheSetAndBoundsHoldTheirBalls) {
       for (std::uint32_t i = cluster.begin; i < cluster.end; ++i) {
         // Checked in long double, finer than the double the bound was computed in.
         const auto d = [](double a, double b) { return static_cast<long double>(a) - static_cast<long double>(b); };
-        const Vertex& c = ordered[i].center;
-        const long double dx = d(c.x(), cluster.bound.center.x()), dy = d(c.y(), cluster.bound.center.y()),
-                          dz = d(c.z(), cluster.bound.center.z());
+        const Vertex& centre = ordered[i].center;
+        const long double dx = d(centre.x(), cluster.bound.center.x()), dy = d(centre.y(), cluster.bound.center.y()),
+                          dz = d(centre.z(), cluster.bound.center.z());
         EXPECT_LE(std::sqrt(dx * dx + dy * dy + dz * dz) + ordered[i].radius, static_cast<long double>(cluster.bound.radius));
       }
     }
     EXPECT_EQ(next, ordered.size());
-    if (group < 2) EXPECT_EQ(heads, 0u);
-    else if (!ordered.empty()) EXPECT_GT(heads, 0u);
+    if (group < 2) {
+      EXPECT_EQ(heads, 0u);
+    } else if (!ordered.empty()) {
+      EXPECT_GT(heads, 0u);
+    }
     // The same balls, reordered.
     auto less = [](const Sphere& a, const Sphere& b) {
       return std::tie(a.center.x(), a.center.y(), a.center.z(), a.radius) < std::tie(b.center.x(), b.center.y(), b.center.z(), b.radius);
