@@ -56,10 +56,10 @@ class OccluderDisks {
   /// Whether the segment from x to `end` is occluded by a disk; adds the comparisons made
   /// (bounds and disks) to `tests`.
   bool occludes(const Vertex& end, std::uint64_t& tests) const;
-  /// occludes() for many segments from x: hidden[i] for the segment to ends[i]. Group by
-  /// group, the segments inside the group's bound that no group before hid, then the
-  /// group's disks one by one across those segments (vectorised across segments); with the
-  /// grid, cell by cell: each cell's disks across the segments whose direction falls into it.
+  /// occludes() for many segments from x: hidden[i] for the segment to ends[i]. Chunk by
+  /// chunk of kChunk segments (disk_groups_hide_chunks): a group's disks only where some
+  /// segment of the chunk not hidden yet lies in its bound's cone; with the grid, cell by
+  /// cell: each cell's disks across the segments whose direction falls into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
   /// Disks kept (padding not counted).
   std::size_t size() const { return count_; }
