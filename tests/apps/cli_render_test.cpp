@@ -120,6 +120,17 @@ TEST_F(CliRender, KnotRoomRendersWithVirtualPointLights) {
     EXPECT_TRUE(all_finite(image(name))) << name;
   }
   EXPECT_GT(json::parse(read_file(folder_ / "vpl-disks.stats.json")).at("stats").at("disk_tests").get<std::uint64_t>(), 0u);
+  // The correction scale defaults to 0.25 with VPLs (2 with the direct integrator), and a
+  // given one is kept.
+  EXPECT_EQ(json::parse(read_file(folder_ / "vpl-cv.stats.json")).at("correction_scale").get<double>(), 0.25);
+  const auto given = render(knot, "vpl-cv-given", size + "--visibility stochastic --estimator control-variate --proxy spheres:25 "
+                                                         "--correction-scale 3");
+  ASSERT_EQ(given.exit_code, 0) << given.err;
+  EXPECT_EQ(json::parse(read_file(folder_ / "vpl-cv-given.stats.json")).at("correction_scale").get<double>(), 3.0);
+  const auto direct = render(knot, "direct-cv", "--spp 1 --width 8 --height 6 --visibility stochastic --estimator control-variate "
+                                               "--proxy spheres:25");
+  ASSERT_EQ(direct.exit_code, 0) << direct.err;
+  EXPECT_EQ(json::parse(read_file(folder_ / "direct-cv.stats.json")).at("correction_scale").get<double>(), 2.0);
   EXPECT_NE(disks.out.find("VPLs ("), std::string::npos) << disks.out;
   const auto bad = render(knot, "vpl-bad", "--integrator vpl --vpls 0");
   EXPECT_EQ(bad.exit_code, 2);

@@ -62,12 +62,12 @@ class VplIntegrator final : public Integrator {
                                            {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
     }
     sort_spatially(lights_);
-    // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its end,
-    // moved off the surface towards that side, is the same for every shading point.
     arrays_ = VplArrays(lights_);
     for (const VirtualPointLight& light : lights_) {
       intensity_.push_back(light.power.cwiseProduct(light.brdf));
       intensity_luminance_.push_back(luminance(intensity_.back()));
+      // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its
+      // end, moved off the surface towards that side, is the same for every shading point.
       ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal, light.distance));
       end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
     }
