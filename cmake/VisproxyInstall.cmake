@@ -5,6 +5,7 @@
 #   P/share/visproxy/schemas      the JSON schemas of every file visproxy reads or writes
 #   P/lib/cmake/visproxy          visproxyConfig.cmake, its version file and the targets
 #   P/lib/pkgconfig/visproxy.pc   for pkg-config
+#   P/lib/python3/dist-packages   the Python module (import visproxy), where Debian's python3 looks
 # Headers name nothing from CGAL, Embree, TBB, OpenMesh or TetGen: those stay inside the
 # shared library (tests/package checks the installed tree).
 
@@ -18,6 +19,9 @@ install(TARGETS visproxy_shared EXPORT visproxyTargets
         LIBRARY DESTINATION "${CMAKE_INSTALL_LIBDIR}"
         INCLUDES DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
 install(TARGETS visproxy RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
+# The module finds libvisproxy.so three levels up, in the prefix's library folder.
+set_target_properties(visproxy_python PROPERTIES INSTALL_RPATH "$ORIGIN/../../../${CMAKE_INSTALL_LIBDIR}")
+install(TARGETS visproxy_python LIBRARY DESTINATION "lib/python3/dist-packages")
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/visproxy"
         FILES_MATCHING PATTERN "*.h"
         PATTERN "embree_support.h" EXCLUDE)

@@ -14,9 +14,10 @@ cd "$(dirname "$0")/.."
 packages="build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libtet1.5-dev libopenmesh-dev libembree-dev libeigen3-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libmeshoptimizer-dev libpng-dev libopenexr-dev"
-# The test suite opens the HTML report in headless Chromium.
-if [ "$mode" = test ]; then packages="$packages chromium"; fi
+  libmeshoptimizer-dev libpng-dev libopenexr-dev
+  python3-dev pybind11-dev python3-numpy"
+# The test suite opens the HTML report in headless Chromium and runs the Python tests.
+if [ "$mode" = test ]; then packages="$packages chromium python3-pytest"; fi
 
 missing=""
 for package in $packages; do

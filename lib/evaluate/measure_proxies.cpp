@@ -1,6 +1,10 @@
 #include "visproxy/evaluate/measure_proxies.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <span>
+#include <vector>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/evaluate/proxy_folder.h"
@@ -13,6 +17,36 @@ namespace {
 using nlohmann::json;
 
 json interval(const Proportion& p) { return {{"value", p.fraction()}, {"lower", p.lower()}, {"upper", p.upper()}}; }
+
+// Isotropic lines are lines. They are drawn as chords of the mesh's bounding sphere, but
+// a proxy may reach beyond that sphere (a coarse outer hull, a box's corners), and a chord
+// that starts inside the proxy's solid need not cross its surface. Such a proxy is traced
+// on the same lines' chords of a concentric sphere of radius `radius` that holds it; the
+// mesh, within the first sphere, meets the longer chords where it met the first ones.
+std::vector<Segment> lengthen_chords(std::span<const Segment> chords, const Vertex& center, double radius) {
+  std::vector<Segment> lines(chords.size());
+  for (std::size_t i = 0; i < chords.size(); ++i) {
+    const Vertex d = chords[i].to - chords[i].from, m = chords[i].from - center;
+    const double a = d.squaredNorm(), b = d.dot(m), c = m.squaredNorm() - radius * radius;
+    if (!(a > 0)) {
+      lines[i] = chords[i];
+      continue;
+    }
+    const double root = std::sqrt(std::max(0.0, b * b - a * c));
+    const double t0 = std::min(0.0, (-b - root) / a), t1 = std::max(1.0, (-b + root) / a);
+    lines[i] = {chords[i].from + t0 * d, chords[i].from + t1 * d};
+  }
+  return lines;
+}
+
+// The radius of a sphere about `center` that holds `geometry`, with a margin of 2^-20 of
+// it for the rounding of the chords' ends.
+double reach(const ProxyGeometry& geometry, const Vertex& center) {
+  double r = 0;
+  for (const Sphere& s : geometry.spheres) r = std::max(r, (s.center - center).norm() + s.radius);
+  for (const Vertex& p : geometry.mesh.positions) r = std::max(r, (p - center).norm());
+  return r * (1 + std::ldexp(1.0, -20));
+}
 
 }  // namespace
 
@@ -48,12 +82,18 @@ json measurement_json(const ProxyMeasurement& m) {
 
 json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder, json manifest,
                      const MeasureOptions& options) {
+  return measure_proxies(
+      mesh, std::move(manifest), [&](const json& entry, std::size_t) { return read_proxy_geometry(folder, entry); }, options);
+}
+
+json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometryReader& read, const MeasureOptions& options) {
   // The mesh's instances in the scene (none: isotropic lines in the mesh's own frame).
   std::vector<Eigen::Affine3d> placements;
   std::vector<Segment> segments;
   json rays;
+  const Sphere line_sphere = bounding_sphere(mesh);
   if (options.scene.empty()) {
-    segments = isotropic_lines(bounding_sphere(mesh), options.rays, options.seed);
+    segments = isotropic_lines(line_sphere, options.rays, options.seed);
     rays = ray_set_json(mesh, options);
     placements.push_back(Eigen::Affine3d::Identity());
   } else {
@@ -103,14 +143,26 @@ json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& fold
   const Vertex center = placed_box.empty() ? Vertex::Zero() : Vertex(0.5 * (placed_box.min + placed_box.max));
   const RayScene mesh_scene(placed_mesh, center);
   const ReferenceRays reference = trace_reference(mesh_scene, std::move(segments), options.timing);
+  std::size_t index = 0;
   for (json& entry : manifest.at("proxies")) {
     if (options.on_start) options.on_start(entry.at("name").get<std::string>());
     const auto start = std::chrono::steady_clock::now();
-    const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
+    const ProxyGeometry geometry = read(entry, index++);
     const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(place_spheres(geometry.spheres), center)
                                                                         : RayScene(place_mesh(geometry.mesh), center);
-    json measured = measurement_json(measure_proxy(reference, proxy_scene, entry_kind(entry), options.timing));
-    measured["rays"] = rays;
+    json proxy_rays = rays;
+    ProxyMeasurement measurement;
+    if (const double radius = options.scene.empty() ? reach(geometry, line_sphere.center) : 0; radius > line_sphere.radius) {
+      const ReferenceRays lines{.rays = lengthen_chords(reference.rays, line_sphere.center, radius),
+                                .mesh_blocked = reference.mesh_blocked,
+                                .mesh_ns_per_ray = reference.mesh_ns_per_ray};
+      measurement = measure_proxy(lines, proxy_scene, entry_kind(entry), options.timing);
+      proxy_rays["proxy_sphere_radius"] = radius;
+    } else {
+      measurement = measure_proxy(reference, proxy_scene, entry_kind(entry), options.timing);
+    }
+    json measured = measurement_json(measurement);
+    measured["rays"] = std::move(proxy_rays);
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     entry["measure"] = std::move(measured);
   }

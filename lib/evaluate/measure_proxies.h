@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/evaluate/proxy_folder.h"
 #include "visproxy/measure/proxy_measurement.h"
 #include "visproxy/mesh/triangle_mesh.h"
 
@@ -38,6 +39,15 @@ nlohmann::json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& opti
 ///   proxy_over_mesh}, seconds.
 nlohmann::json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder,
                                nlohmann::json manifest, const MeasureOptions& options = {});
+
+/// Gives the geometry of the manifest's entry `index` (its `entry`): for proxies held in
+/// memory rather than in a folder.
+using ProxyGeometryReader = std::function<ProxyGeometry(const nlohmann::json& entry, std::size_t index)>;
+
+/// The same for proxies read through `read`: each entry of manifest["proxies"] needs only
+/// its `name` and `kind`.
+nlohmann::json measure_proxies(const TriangleMesh& mesh, nlohmann::json manifest, const ProxyGeometryReader& read,
+                               const MeasureOptions& options = {});
 
 /// The `measure` object of one measured proxy.
 nlohmann::json measurement_json(const ProxyMeasurement& measurement);

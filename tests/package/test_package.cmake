@@ -78,3 +78,18 @@ run("running the pkg-config build" "${WORK_DIR}/consumer-pc" "${MESH}")
 if(NOT output MATCHES "contains the mesh: proved")
   message(FATAL_ERROR "the pkg-config build printed: ${output}")
 endif()
+
+# 7. The installed Python module imports from the prefix alone and builds a proved hull.
+set(ENV{PYTHONPATH} "${prefix}/lib/python3/dist-packages")
+file(WRITE "${WORK_DIR}/installed_module.py" [[
+import sys
+import visproxy as vp
+vertices, triangles = vp.read_mesh(sys.argv[1])
+proxies = vp.build(vertices, triangles, ["hull"])
+assert vp.verify(vertices, triangles, proxies)[0]["holds"]
+print("python", vp.__version__, vp.__file__)
+]])
+run("the installed Python module" ${PYTHON} "${WORK_DIR}/installed_module.py" "${MESH}")
+if(NOT output MATCHES "python 0\\.2\\." OR NOT output MATCHES "${prefix}/lib/python3/dist-packages/visproxy")
+  message(FATAL_ERROR "the installed Python module printed: ${output}")
+endif()

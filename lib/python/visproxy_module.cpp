@@ -1,0 +1,585 @@
+// The `visproxy` Python module: meshes as numpy arrays, proxies as dicts of arrays with
+// their manifest entries, and every result as the JSON objects the CLI records, turned
+// into Python dicts and lists.
+//
+//   import visproxy as vp
+//   vertices, triangles = vp.read_mesh("bunny.off")     # (V, 3) float64, (T, 3) int64
+//   proxies = vp.build(vertices, triangles, ["hull", "spheres:100"], seed=1)
+//   verdicts = vp.verify(vertices, triangles, proxies)  # [{"claim", "holds", ...}, ...]
+//   figures = vp.measure(vertices, triangles, proxies, rays=100_000)
+//
+// The long calls (build, verify, measure, render) let other Python threads run. Errors
+// in the input raise visproxy.InvalidInputError (a ValueError) or visproxy.FileError (an
+// OSError), both visproxy.Error, with the one-line message the CLI prints.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "visproxy/core/errors.h"
+#include "visproxy/core/version.h"
+#include "visproxy/evaluate/measure_proxies.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/inspect/mesh_report.h"
+#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
+#include "visproxy/proxy/manifest.h"
+#include "visproxy/render/renderer.h"
+#include "visproxy/scene/scene.h"
+
+namespace py = pybind11;
+using nlohmann::json;
+
+namespace visproxy::python {
+namespace {
+
+// ---- JSON <-> Python --------------------------------------------------------------
+
+py::object to_python(const json& value) {
+  switch (value.type()) {
+    case json::value_t::null: return py::none();
+    case json::value_t::boolean: return py::bool_(value.get<bool>());
+    case json::value_t::number_integer: return py::int_(value.get<std::int64_t>());
+    case json::value_t::number_unsigned: return py::int_(value.get<std::uint64_t>());
+    case json::value_t::number_float: return py::float_(value.get<double>());
+    case json::value_t::string: return py::str(value.get_ref<const std::string&>());
+    case json::value_t::array: {
+      py::list list;
+      for (const json& item : value) list.append(to_python(item));
+      return list;
+    }
+    case json::value_t::object: {
+      py::dict dict;
+      for (const auto& [key, item] : value.items()) dict[py::str(key)] = to_python(item);
+      return dict;
+    }
+    case json::value_t::binary:
+    case json::value_t::discarded: break;
+  }
+  return py::none();
+}
+
+json from_python(py::handle value, const std::string& where) {
+  if (value.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+  if (py::isinstance<py::int_>(value)) {
+    const py::int_ number = py::reinterpret_borrow<py::int_>(value);
+    if (py::int_(0) > number) return value.cast<std::int64_t>();
+    return value.cast<std::uint64_t>();
+  }
+  if (py::isinstance<py::float_>(value)) return value.cast<double>();
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::isinstance<py::dict>(value)) {
+    json object = json::object();
+    for (const auto& [key, item] : py::reinterpret_borrow<py::dict>(value)) {
+      const std::string name = py::str(key).cast<std::string>();
+      object[name] = from_python(item, where + "." + name);
+    }
+    return object;
+  }
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    json array = json::array();
+    std::size_t i = 0;
+    for (const py::handle item : value) array.push_back(from_python(item, where + "[" + std::to_string(i++) + "]"));
+    return array;
+  }
+  // numpy scalars
+  if (py::hasattr(value, "item") && py::hasattr(value, "dtype")) return from_python(value.attr("item")(), where);
+  throw py::type_error(where + ": cannot be stored in a manifest (" + py::str(value.get_type()).cast<std::string>() + ")");
+}
+
+// ---- arrays <-> meshes ------------------------------------------------------------
+
+py::array_t<double> vertex_array(const std::vector<Vertex>& positions) {
+  py::array_t<double> array({static_cast<py::ssize_t>(positions.size()), py::ssize_t{3}});
+  auto out = array.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    for (int k = 0; k < 3; ++k) out(static_cast<py::ssize_t>(i), k) = positions[i][k];
+  return array;
+}
+
+py::array_t<std::int64_t> triangle_array(const std::vector<Triangle>& triangles) {
+  py::array_t<std::int64_t> array({static_cast<py::ssize_t>(triangles.size()), py::ssize_t{3}});
+  auto out = array.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < triangles.size(); ++i)
+    for (int k = 0; k < 3; ++k) out(static_cast<py::ssize_t>(i), k) = triangles[i][static_cast<std::size_t>(k)];
+  return array;
+}
+
+py::array_t<double> sphere_array(const std::vector<Sphere>& spheres) {
+  py::array_t<double> array({static_cast<py::ssize_t>(spheres.size()), py::ssize_t{4}});
+  auto out = array.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    const auto row = static_cast<py::ssize_t>(i);
+    for (int k = 0; k < 3; ++k) out(row, k) = spheres[i].center[k];
+    out(row, 3) = spheres[i].radius;
+  }
+  return array;
+}
+
+std::string dtype_text(const py::array& array) { return py::str(array.dtype()).cast<std::string>(); }
+
+// An (N, columns) float64 array from anything numpy reads as real numbers.
+py::array_t<double, py::array::c_style> real_rows(py::handle object, py::ssize_t columns, const std::string& source,
+                                                  const char* what) {
+  const py::array array = py::array::ensure(object);
+  if (!array) throw InvalidInputError(source, std::string(what) + ": not an array");
+  const char kind = array.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw InvalidInputError(source, std::string(what) + ": must hold real numbers, not " + dtype_text(array));
+  if (array.ndim() != 2 || array.shape(1) != columns)
+    throw InvalidInputError(source, std::string(what) + ": must have shape (N, " + std::to_string(columns) + ")");
+  return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(array);
+}
+
+TriangleMesh mesh_from_arrays(py::handle vertices, py::handle triangles, const std::string& source) {
+  const auto points = real_rows(vertices, 3, source, "vertices");
+  const py::array faces = py::array::ensure(triangles);
+  if (!faces) throw InvalidInputError(source, "triangles: not an array");
+  if (faces.dtype().kind() != 'i' && faces.dtype().kind() != 'u')
+    throw InvalidInputError(source, "triangles: must hold integer vertex indices, not " + dtype_text(faces));
+  if (faces.ndim() != 2 || faces.shape(1) != 3) throw InvalidInputError(source, "triangles: must have shape (T, 3)");
+  const auto indices = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(faces);
+  // Unsigned 64-bit indices above 2^63 wrap negative here and are refused as such.
+  if (faces.dtype().kind() == 'u' && faces.dtype().itemsize() == 8) {
+    const auto raw = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>::ensure(faces).unchecked<2>();
+    for (py::ssize_t i = 0; i < raw.shape(0); ++i)
+      for (py::ssize_t k = 0; k < 3; ++k)
+        if (raw(i, k) > static_cast<std::uint64_t>(INT64_MAX))
+          throw InvalidInputError(source, "triangles[" + std::to_string(i) + ", " + std::to_string(k) + "]: vertex index " +
+                                              std::to_string(raw(i, k)) + " is out of range");
+  }
+  TriangleMesh mesh;
+  const auto p = points.unchecked<2>();
+  mesh.positions.resize(static_cast<std::size_t>(p.shape(0)));
+  for (py::ssize_t i = 0; i < p.shape(0); ++i) mesh.positions[static_cast<std::size_t>(i)] = Vertex(p(i, 0), p(i, 1), p(i, 2));
+  const auto t = indices.unchecked<2>();
+  mesh.triangles.resize(static_cast<std::size_t>(t.shape(0)));
+  const auto count = static_cast<std::int64_t>(mesh.positions.size());
+  for (py::ssize_t i = 0; i < t.shape(0); ++i)
+    for (py::ssize_t k = 0; k < 3; ++k) {
+      const std::int64_t index = t(i, k);
+      if (index < 0 || index >= count)
+        throw InvalidInputError(source, "triangles[" + std::to_string(i) + ", " + std::to_string(k) + "]: vertex index " +
+                                            std::to_string(index) + " is out of range (" + std::to_string(count) +
+                                            " vertices)");
+      mesh.triangles[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = static_cast<VertexIndex>(index);
+    }
+  require_coordinates_in_range(mesh, source);
+  return mesh;
+}
+
+std::vector<Sphere> spheres_from_array(py::handle object, const std::string& source) {
+  const auto rows = real_rows(object, 4, source, "spheres");
+  const auto s = rows.unchecked<2>();
+  std::vector<Sphere> spheres(static_cast<std::size_t>(s.shape(0)));
+  for (py::ssize_t i = 0; i < s.shape(0); ++i) {
+    const Sphere sphere{Vertex(s(i, 0), s(i, 1), s(i, 2)), s(i, 3)};
+    if (!sphere.center.allFinite() || !std::isfinite(sphere.radius) || sphere.radius <= 0 ||
+        sphere.center.cwiseAbs().maxCoeff() > kMaxCoordinate || sphere.radius > kMaxCoordinate)
+      throw InvalidInputError(source, "spheres[" + std::to_string(i) + "]: needs a finite centre and a positive finite radius");
+    spheres[static_cast<std::size_t>(i)] = sphere;
+  }
+  return spheres;
+}
+
+// ---- proxies as dicts -------------------------------------------------------------
+
+py::dict proxy_dict(const std::string& name, const json& entry, const ProxyGeometry& geometry) {
+  py::dict proxy;
+  proxy["name"] = name;
+  proxy["kind"] = entry.value("kind", std::string("general"));
+  proxy["primitive_type"] = std::string(primitive_type_name(geometry.type));
+  const bool spheres = geometry.type == PrimitiveType::sphere;
+  proxy["vertices"] = spheres ? py::object(py::none()) : py::object(vertex_array(geometry.mesh.positions));
+  proxy["triangles"] = spheres ? py::object(py::none()) : py::object(triangle_array(geometry.mesh.triangles));
+  proxy["spheres"] = spheres ? py::object(sphere_array(geometry.spheres)) : py::object(py::none());
+  proxy["manifest"] = to_python(entry);
+  return proxy;
+}
+
+// A proxy dict (build's, read_proxies', or one a user made) as an entry and its geometry.
+struct HeldProxy {
+  json entry;
+  ProxyGeometry geometry;
+};
+
+HeldProxy held_proxy(py::handle object, std::size_t index) {
+  const std::string where = "proxies[" + std::to_string(index) + "]";
+  if (!py::isinstance<py::dict>(object)) throw py::type_error(where + ": must be a dict (as build or read_proxies returns)");
+  const py::dict proxy = py::reinterpret_borrow<py::dict>(object);
+  HeldProxy held;
+  held.entry = proxy.contains("manifest") && !proxy["manifest"].is_none() ? from_python(proxy["manifest"], where + ".manifest")
+                                                                          : json::object();
+  if (!held.entry.is_object()) throw InvalidInputError(where, "manifest: must be a dict");
+  if (proxy.contains("kind") && !proxy["kind"].is_none()) held.entry["kind"] = proxy["kind"].cast<std::string>();
+  if (proxy.contains("name") && !proxy["name"].is_none()) held.entry["name"] = proxy["name"].cast<std::string>();
+  if (!held.entry.contains("name")) held.entry["name"] = where;
+  if (!held.entry.contains("kind")) throw InvalidInputError(where, "needs a kind: \"outside\", \"inside\" or \"general\"");
+  const std::string kind = held.entry["kind"].is_string() ? held.entry["kind"].get<std::string>() : "";
+  if (kind != "outside" && kind != "inside" && kind != "general")
+    throw InvalidInputError(where, "kind: must be \"outside\", \"inside\" or \"general\"");
+  const bool has_spheres = proxy.contains("spheres") && !proxy["spheres"].is_none();
+  if (has_spheres) {
+    held.geometry.type = PrimitiveType::sphere;
+    held.geometry.spheres = spheres_from_array(proxy["spheres"], where);
+    if (held.geometry.spheres.empty()) throw InvalidInputError(where, "spheres: holds no sphere");
+  } else {
+    if (!proxy.contains("vertices") || !proxy.contains("triangles") || proxy["vertices"].is_none() ||
+        proxy["triangles"].is_none())
+      throw InvalidInputError(where, "needs vertices and triangles, or spheres");
+    held.geometry.type = proxy.contains("primitive_type") && py::str(proxy["primitive_type"]).cast<std::string>() == "box"
+                             ? PrimitiveType::box
+                             : PrimitiveType::triangle;
+    held.geometry.mesh = mesh_from_arrays(proxy["vertices"], proxy["triangles"], where);
+    if (held.geometry.mesh.triangles.empty()) throw InvalidInputError(where, "holds no triangles");
+  }
+  return held;
+}
+
+std::vector<HeldProxy> held_proxies(py::handle proxies) {
+  std::vector<HeldProxy> held;
+  if (py::isinstance<py::dict>(proxies)) {
+    held.push_back(held_proxy(proxies, 0));
+    return held;
+  }
+  std::size_t index = 0;
+  for (const py::handle proxy : proxies) {
+    held.push_back(held_proxy(proxy, index));
+    ++index;
+  }
+  return held;
+}
+
+// ---- options ----------------------------------------------------------------------
+
+template <typename Enum>
+Enum choice(const std::string& option, const std::string& value, const std::map<std::string, Enum>& choices) {
+  if (const auto found = choices.find(value); found != choices.end()) return found->second;
+  std::string allowed;
+  for (const auto& [name, unused] : choices) allowed += (allowed.empty() ? "" : ", ") + name;
+  throw py::value_error(option + ": '" + value + "' is not one of " + allowed);
+}
+
+Weld weld_mode(const std::string& weld) {
+  return choice<Weld>("weld", weld, {{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}});
+}
+
+// ---- the functions ----------------------------------------------------------------
+
+py::tuple read_mesh_arrays(const std::filesystem::path& path, const std::string& weld) {
+  TriangleMesh mesh;
+  {
+    const Weld mode = weld_mode(weld);
+    py::gil_scoped_release release;
+    mesh = read_mesh(path, {.weld = mode, .on_warning = {}});
+  }
+  return py::make_tuple(vertex_array(mesh.positions), triangle_array(mesh.triangles));
+}
+
+void write_mesh_arrays(const std::filesystem::path& path, py::handle vertices, py::handle triangles) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, path.string());
+  py::gil_scoped_release release;
+  write_mesh(path, mesh);
+}
+
+py::object inspect_arrays(py::handle vertices, py::handle triangles, const std::string& source) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  json report;
+  {
+    py::gil_scoped_release release;
+    report = to_json(inspect_mesh(mesh));
+  }
+  return to_python(report);
+}
+
+py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<std::vector<std::string>> specs_text,
+                      std::uint64_t seed, bool per_component, std::size_t hausdorff_samples, const std::string& tets,
+                      std::size_t gssa_lines, std::optional<std::filesystem::path> output, const std::string& source,
+                      const std::string& weld) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  const std::vector<ProxySpec> specs = specs_text ? parse_proxy_specs(*specs_text) : default_proxy_specs();
+  if (hausdorff_samples < 100) throw py::value_error("hausdorff_samples: must be at least 100");
+  if (gssa_lines < 1000) throw py::value_error("gssa_lines: must be at least 1000");
+  const BuildOptions options{
+      .per_component = per_component,
+      .hausdorff_samples = hausdorff_samples,
+      .seed = seed,
+      .on_start = {},
+      .tets = choice<InnerTetrahedra>("tets", tets, {{"normals", InnerTetrahedra::normals}, {"tetgen", InnerTetrahedra::tetgen}}),
+      .gssa_lines = gssa_lines,
+      .skip_inside_unless_closed = !specs_text.has_value(),
+      .on_skip = {}};
+  weld_mode(weld);  // checked: recorded in the manifest as how the source was read
+  std::vector<BuiltProxy> built;
+  {
+    py::gil_scoped_release release;
+    built = build_proxies(mesh, source, specs, options);
+    if (output) {
+      const ManifestMesh described{.path = source,
+                                   .weld = weld,
+                                   .vertices = mesh.positions.size(),
+                                   .triangles = mesh.triangles.size(),
+                                   .components = analyze_topology(mesh).components,
+                                   .bounds = bounding_box(mesh)};
+      write_proxy_folder(*output, described, built, options);
+    }
+  }
+  py::list proxies;
+  for (const BuiltProxy& proxy : built) {
+    ProxyGeometry geometry{.type = proxy.primitive_type, .mesh = {}, .spheres = proxy.spheres};
+    if (proxy.primitive_type != PrimitiveType::sphere) geometry.mesh = proxy.mesh;
+    py::dict dict = proxy_dict(proxy.name, manifest_entry(proxy), geometry);
+    dict["spec"] = proxy.spec.name();
+    proxies.append(std::move(dict));
+  }
+  return proxies;
+}
+
+py::list read_proxies_folder(const std::filesystem::path& folder) {
+  json manifest;
+  std::vector<ProxyGeometry> geometries;
+  {
+    py::gil_scoped_release release;
+    manifest = read_manifest(folder);
+    for (const json& entry : manifest.at("proxies")) geometries.push_back(read_proxy_geometry(folder, entry));
+  }
+  py::list proxies;
+  for (std::size_t i = 0; i < geometries.size(); ++i) {
+    const json& entry = manifest["proxies"][i];
+    proxies.append(proxy_dict(entry.at("name").get<std::string>(), entry, geometries[i]));
+  }
+  return proxies;
+}
+
+py::object read_manifest_dict(const std::filesystem::path& folder) {
+  json manifest;
+  {
+    py::gil_scoped_release release;
+    manifest = read_manifest(folder);
+  }
+  return to_python(manifest);
+}
+
+json mesh_manifest(const TriangleMesh& mesh) {
+  const BoundingBox box = bounding_box(mesh);
+  return {{"mesh", {{"bbox", {{"diagonal", box.diagonal()}}}}}};
+}
+
+py::list verify_arrays(py::handle vertices, py::handle triangles, py::handle proxies, std::size_t hausdorff_samples,
+                       std::uint64_t seed, const std::string& source) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  const std::vector<HeldProxy> held = held_proxies(proxies);
+  if (hausdorff_samples < 100) throw py::value_error("hausdorff_samples: must be at least 100");
+  std::vector<json> verdicts;
+  {
+    py::gil_scoped_release release;
+    const json manifest = mesh_manifest(mesh);
+    for (const HeldProxy& proxy : held)
+      verdicts.push_back(verify_proxy(mesh, manifest, proxy.entry, proxy.geometry,
+                                      {.hausdorff_samples = hausdorff_samples, .seed = seed}));
+  }
+  py::list result;
+  for (const json& verdict : verdicts) result.append(to_python(verdict));
+  return result;
+}
+
+py::list measure_arrays(py::handle vertices, py::handle triangles, py::handle proxies, std::size_t rays, std::uint64_t seed,
+                        std::optional<std::filesystem::path> scene, std::size_t timed_rays, const std::string& source) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  const std::vector<HeldProxy> held = held_proxies(proxies);
+  if (rays < 1) throw py::value_error("rays: must be at least 1");
+  json manifest = {{"proxies", json::array()}};
+  for (const HeldProxy& proxy : held) manifest["proxies"].push_back(proxy.entry);
+  MeasureOptions options{.rays = rays, .seed = seed, .scene = scene.value_or(std::filesystem::path()),
+                         .timing = {.rays = timed_rays, .repeats = 3}, .on_start = {}, .on_warning = {}};
+  {
+    py::gil_scoped_release release;
+    manifest = measure_proxies(
+        mesh, std::move(manifest), [&](const json&, std::size_t index) { return held[index].geometry; }, options);
+  }
+  py::list result;
+  for (const json& entry : manifest["proxies"]) result.append(to_python(entry["measure"]));
+  return result;
+}
+
+py::array_t<double> image_array(const Image& image) {
+  py::array_t<double> array({static_cast<py::ssize_t>(image.height), static_cast<py::ssize_t>(image.width), py::ssize_t{3}});
+  auto out = array.mutable_unchecked<3>();
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (int k = 0; k < 3; ++k) out(y, x, k) = image.at(x, y)[k];
+  return array;
+}
+
+py::dict render_scene(const std::filesystem::path& scene_path, const std::string& integrator, const std::string& visibility,
+                      const std::string& estimator, const std::string& probabilities, const std::string& self_shadow, int spp,
+                      int shadow_rays, std::uint64_t seed, int width, int height, std::optional<std::string> proxy,
+                      std::optional<std::filesystem::path> cache, int probe_rays, int probe_passes,
+                      double probability_floor, std::optional<double> correction_scale, bool split, int vpls, int bounces,
+                      std::uint64_t vpl_seed, double vpl_clamp, double seconds, std::optional<std::filesystem::path> output) {
+  RenderOptions options;
+  options.integrator = choice<IntegratorKind>("integrator", integrator, {{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}});
+  options.visibility = choice<VisibilityMode>("visibility", visibility,
+                                              {{"exact", VisibilityMode::exact},
+                                               {"stochastic", VisibilityMode::stochastic},
+                                               {"bounds", VisibilityMode::bounds},
+                                               {"spheres", VisibilityMode::spheres}});
+  options.estimator = choice<StochasticEstimator>(
+      "estimator", estimator,
+      {{"eq8", StochasticEstimator::term_choice}, {"control-variate", StochasticEstimator::control_variate}});
+  options.probabilities = choice<ProbabilityMode>(
+      "probabilities", probabilities,
+      {{"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}});
+  options.self_shadow = choice<SelfShadow>(
+      "self_shadow", self_shadow, {{"heuristic", SelfShadow::heuristic}, {"exact", SelfShadow::exact}, {"none", SelfShadow::none}});
+  if (options.probabilities == ProbabilityMode::learned && options.estimator != StochasticEstimator::control_variate)
+    throw py::value_error("probabilities: learned needs estimator='control-variate'");
+  if (width < 0 || height < 0) throw py::value_error("width and height: must be positive (0: the scene's)");
+  if (output && !is_linear_image_path(*output))
+    throw InvalidInputError(*output, "unsupported image format (use .pfm or .exr; a PNG is written beside it)");
+  options.spp = spp;
+  options.shadow_rays = shadow_rays;
+  options.seed = seed;
+  options.probe_rays = probe_rays;
+  options.probe_passes = probe_passes;
+  options.probability_floor = probability_floor;
+  options.correction_scale = correction_scale.value_or(options.integrator == IntegratorKind::vpl ? 0.25 : 2.0);
+  options.split = split;
+  options.vpls = vpls;
+  options.bounces = bounces;
+  options.vpl_seed = vpl_seed;
+  options.vpl_clamp = vpl_clamp;
+  options.seconds = seconds;
+  validate(options);
+
+  RenderResult result;
+  json instances = json::array();
+  std::vector<std::string> notes;
+  {
+    py::gil_scoped_release release;
+    Scene scene = load_scene(scene_path);
+    if (width > 0) scene.camera.width = width;
+    if (height > 0) scene.camera.height = height;
+    SceneProxyOptions proxy_options{.cache = cache.value_or(default_proxy_cache()),
+                                    .stochastic_spec = proxy,
+                                    .seed = seed,
+                                    .on_proxy = nullptr,
+                                    .on_verify = nullptr};
+    const std::vector<MeshProxies> proxies = options.visibility == VisibilityMode::exact
+                                                 ? std::vector<MeshProxies>(scene.instances.size())
+                                                 : prepare_scene_proxies(scene, proxy_options);
+    const RenderWorld world(scene, proxies);
+    notes = world.notes();
+    result = render(scene, world, options);
+    for (std::size_t i = 0; i < scene.instances.size(); ++i)
+      instances.push_back({{"mesh", scene.instances[i].mesh},
+                           {"stochastic_proxy", proxies[i].stochastic ? json(proxies[i].stochastic->spec) : json(nullptr)},
+                           {"outside_proxy", proxies[i].outside ? json(proxies[i].outside->spec) : json(nullptr)},
+                           {"inside_proxy", proxies[i].inside ? json(proxies[i].inside->spec) : json(nullptr)},
+                           {"stochastic_proxy_proved", proxies[i].stochastic && proxies[i].stochastic->proved}});
+    if (output) {
+      if (output->has_parent_path()) std::filesystem::create_directories(output->parent_path());
+      write_linear_image(*output, result.image);
+    }
+  }
+  py::dict rendered;
+  rendered["image"] = image_array(result.image);
+  rendered["p1_map"] = result.p1_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.p1_map));
+  rendered["cost_map"] = image_array(result.cost_map);
+  rendered["stats"] = to_python(result.stats.to_json());
+  rendered["instances"] = to_python(instances);
+  rendered["proxy_notes"] = py::cast(notes);
+  rendered["scene"] = scene_path.string();
+  rendered["seed"] = seed;
+  return rendered;
+}
+
+}  // namespace
+}  // namespace visproxy::python
+
+PYBIND11_MODULE(visproxy, m) {
+  using namespace visproxy::python;
+  using namespace pybind11::literals;
+  m.doc() =
+      "visproxy: visibility proxies for shadow rays. Meshes are numpy arrays, vertices (V, 3) float64 and triangles "
+      "(T, 3) integer; proxies are dicts with name, kind, primitive_type, vertices, triangles, spheres (N, 4: centre, "
+      "radius) and manifest (the entry 'visproxy build' writes). Results are the JSON objects the CLI records, as dicts.";
+  m.attr("__version__") = visproxy::version();
+
+  // visproxy.Error, and its two kinds as Python's ValueError and OSError too.
+  static py::handle error = PyErr_NewException("visproxy.Error", PyExc_Exception, nullptr);
+  static py::handle invalid = PyErr_NewException(
+      "visproxy.InvalidInputError", py::make_tuple(error, py::handle(PyExc_ValueError)).release().ptr(), nullptr);
+  static py::handle file = PyErr_NewException("visproxy.FileError",
+                                              py::make_tuple(error, py::handle(PyExc_OSError)).release().ptr(), nullptr);
+  m.attr("Error") = error;
+  m.attr("InvalidInputError") = invalid;
+  m.attr("FileError") = file;
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const visproxy::InvalidInputError& e) {
+      PyErr_SetString(invalid.ptr(), e.what());
+    } catch (const visproxy::IOError& e) {
+      PyErr_SetString(file.ptr(), e.what());
+    } catch (const visproxy::Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    } catch (const nlohmann::json::exception& e) {
+      PyErr_SetString(invalid.ptr(), e.what());
+    }
+  });
+
+  m.def("read_mesh", &read_mesh_arrays, "path"_a, "weld"_a = "auto",
+        "Reads an OBJ, PLY, OFF or STL mesh as (vertices, triangles): (V, 3) float64 and (T, 3) int64. weld: 'auto' "
+        "(merge identical vertices for STL only), 'never' or 'always'. Raises InvalidInputError naming the file (and "
+        "line) for malformed content, FileError when it cannot be read.");
+  m.def("write_mesh", &write_mesh_arrays, "path"_a, "vertices"_a, "triangles"_a,
+        "Writes a mesh as binary PLY (double coordinates) or OBJ (shortest round-trip decimals) by the extension, exactly, under a temporary name then renamed.");
+  m.def("inspect", &inspect_arrays, "vertices"_a, "triangles"_a, "source"_a = "mesh arrays",
+        "The mesh report of 'visproxy info --json' (counts, bounds, topology, orientation, degenerate triangles, "
+        "self-intersections, area, volume, watertight) as a dict. `source` names the mesh in errors.");
+  m.def("build", &build_arrays, "vertices"_a, "triangles"_a, "specs"_a = py::none(), py::kw_only(), "seed"_a = 1,
+        "per_component"_a = false, "hausdorff_samples"_a = 20000, "tets"_a = "normals", "gssa_lines"_a = 100000,
+        "output"_a = py::none(), "source"_a = "mesh arrays", "weld"_a = "auto",
+        "Builds proxies as 'visproxy build' does, from the same specs ('aabb', 'hull:32', 'spheres:100', ...; None: the "
+        "default set) and seed: the same arrays, bit for bit. Returns a list of proxy dicts. With `output`, also writes the "
+        "proxy folder (PLY/OBJ or sphere-set JSON files and manifest.json) there, recording `source` and `weld` as the "
+        "mesh it came from.");
+  m.def("read_proxies", &read_proxies_folder, "folder"_a,
+        "The proxies of a folder 'visproxy build' wrote, as proxy dicts with their manifest entries (verify and measure "
+        "results included when recorded). Files that do not hold what the manifest says raise InvalidInputError.");
+  m.def("read_manifest", &read_manifest_dict, "folder"_a, "FOLDER/manifest.json, checked, as a dict.");
+  m.def("verify", &verify_arrays, "vertices"_a, "triangles"_a, "proxies"_a, py::kw_only(), "hausdorff_samples"_a = 20000,
+        "seed"_a = 1, "source"_a = "mesh arrays",
+        "Checks each proxy's claim against the mesh exactly, as 'visproxy verify' does: outside proxies must contain the "
+        "mesh, inside proxies lie within it; general proxies get a sampled Hausdorff distance. `proxies`: a proxy dict or "
+        "a list of them; only kind and geometry are read. Returns one verify dict per proxy: claim, holds, margin, "
+        "counterexample, ...");
+  m.def("measure", &measure_arrays, "vertices"_a, "triangles"_a, "proxies"_a, py::kw_only(), "rays"_a = 1000000,
+        "seed"_a = 1, "scene"_a = py::none(), "timed_rays"_a = 200000, "source"_a = "mesh arrays",
+        "Traces every proxy with the same seeded isotropic lines as the mesh (or a scene's shadow segments, `scene`), as "
+        "'visproxy measure' does. Returns one measure dict per proxy: counts, f_hit, f_miss, v_avg, gssa_ratio (value, "
+        "lower, upper at 95 %), optimal probabilities, variance, cost_ns_per_ray.");
+  m.def("render", &render_scene, "scene"_a, py::kw_only(), "integrator"_a = "direct", "visibility"_a = "exact",
+        "estimator"_a = "eq8", "probabilities"_a = "equal", "self_shadow"_a = "heuristic", "spp"_a = 16,
+        "shadow_rays"_a = 1, "seed"_a = 1, "width"_a = 0, "height"_a = 0, "proxy"_a = py::none(), "cache"_a = py::none(),
+        "probe_rays"_a = 16, "probe_passes"_a = 0, "probability_floor"_a = 0.05, "correction_scale"_a = py::none(),
+        "split"_a = true, "vpls"_a = 1024, "bounces"_a = 1, "vpl_seed"_a = 1, "vpl_clamp"_a = 0.05, "seconds"_a = 0.0,
+        "output"_a = py::none(),
+        "Renders a scene file as 'visproxy render' does with the same options (names as the CLI's, '-' kept in values "
+        "such as 'control-variate'). Returns a dict: image (H, W, 3) float64 linear radiance, p1_map, cost_map, stats, "
+        "instances, proxy_notes. With `output` (.pfm or .exr), also writes the image there.");
+}

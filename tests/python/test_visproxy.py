@@ -1,0 +1,338 @@
+"""The Python module against the library's guarantees and the CLI's own output.
+
+Run by CTest (tests/CMakeLists.txt) with PYTHONPATH at the built module and, in the
+environment, VISPROXY_CLI (the visproxy executable), VISPROXY_MESH_DIR (the libcgal-demo
+meshes) and VISPROXY_SOURCE_DIR.
+"""
+
+import json
+import os
+import pathlib
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import visproxy as vp
+
+CLI = os.environ.get("VISPROXY_CLI", "visproxy")
+MESHES = pathlib.Path(os.environ["VISPROXY_MESH_DIR"])
+SOURCE = pathlib.Path(os.environ["VISPROXY_SOURCE_DIR"])
+KNOT = MESHES / "knot1.off"  # closed, 6400 triangles
+ELEPHANT = MESHES / "elephant-with-holes.off"  # open
+
+EVERY_BUILDER = ["aabb", "obb", "hull", "hull:32", "wrap", "outer:64", "quadric:200", "cluster:0.05",
+                 "inside:10", "spheres:30,10"]
+
+
+def cli(*arguments, check=True):
+    result = subprocess.run([CLI, *map(str, arguments)], capture_output=True, text=True)
+    if check:
+        assert result.returncode == 0, result.stderr
+    return result
+
+
+@pytest.fixture(scope="module")
+def knot():
+    return vp.read_mesh(KNOT)
+
+
+@pytest.fixture(scope="module")
+def knot_proxies(knot):
+    return vp.build(*knot, EVERY_BUILDER, seed=7)
+
+
+# ---- meshes as numpy arrays ---------------------------------------------------------
+
+def test_read_mesh_gives_float64_vertices_and_int64_triangles(knot):
+    vertices, triangles = knot
+    assert vertices.dtype == np.float64 and vertices.shape == (3200, 3)
+    assert triangles.dtype == np.int64 and triangles.shape == (6400, 3)
+    assert triangles.min() == 0 and triangles.max() == 3199
+    report = vp.inspect(vertices, triangles)
+    assert report["closed"] and report["watertight"] and report["components"] == 1
+    assert report["triangles"] == 6400 and report["volume"] > 0
+
+
+@pytest.mark.parametrize("extension", ["ply", "obj"])
+def test_meshes_round_trip_through_every_format(tmp_path, knot, extension):
+    vertices, triangles = knot
+    path = tmp_path / f"knot.{extension}"
+    vp.write_mesh(path, vertices, triangles)
+    again_vertices, again_triangles = vp.read_mesh(path, weld="never")
+    assert np.array_equal(again_triangles, triangles)
+    assert np.array_equal(again_vertices, vertices)  # doubles, exactly
+
+
+def test_arrays_of_other_types_and_layouts_are_read_as_their_values(knot):
+    vertices, triangles = knot
+    reference = vp.inspect(vertices, triangles)
+    # float32 vertices, uint32 triangles, Fortran order, and a strided view
+    fortran = np.asfortranarray(vertices.astype(np.float32).astype(np.float64))
+    for v, t in [(fortran, triangles.astype(np.uint32)), (vertices, triangles.astype(np.int32)),
+                 (np.hstack([vertices, vertices])[:, :3], np.hstack([triangles, triangles])[:, 3:])]:
+        report = vp.inspect(v, t)
+        assert report["triangles"] == reference["triangles"]
+        assert report["watertight"]
+        assert report["volume"] == pytest.approx(reference["volume"], rel=1e-6)
+
+
+# ---- every builder --------------------------------------------------------------------
+
+def test_every_builder_returns_its_proxies_as_arrays_with_their_manifest_entries(knot, knot_proxies):
+    vertices, _ = knot
+    names = [proxy["name"] for proxy in knot_proxies]
+    assert names == ["aabb", "obb", "hull", "hull-32", "wrap", "outer-64", "quadric-200", "cluster-0.05", "inside-10",
+                     "spheres-30", "spheres-10"]
+    low, high = vertices.min(axis=0), vertices.max(axis=0)
+    for proxy in knot_proxies:
+        entry = proxy["manifest"]
+        assert entry["name"] == proxy["name"] and entry["kind"] == proxy["kind"]
+        assert proxy["kind"] in ("outside", "inside", "general")
+        if proxy["primitive_type"] == "sphere":
+            spheres = proxy["spheres"]
+            assert proxy["vertices"] is None and spheres.dtype == np.float64 and spheres.shape[1] == 4
+            assert 0 < len(spheres) <= int(proxy["name"].split("-")[1])
+            assert len(spheres) == entry["primitives"]
+            assert (spheres[:, 3] > 0).all()
+        else:
+            assert proxy["spheres"] is None
+            assert proxy["vertices"].shape[1] == 3 and proxy["triangles"].shape[1] == 3
+            assert proxy["triangles"].max() < len(proxy["vertices"])
+            if proxy["kind"] == "outside":  # an outside proxy's box holds the mesh's
+                assert (proxy["vertices"].min(axis=0) <= low).all() and (proxy["vertices"].max(axis=0) >= high).all()
+    hull32 = knot_proxies[names.index("hull-32")]
+    assert len(hull32["triangles"]) <= 32 * 30  # at most 32 faces, triangulated
+    assert len(knot_proxies[names.index("quadric-200")]["triangles"]) <= 200
+
+
+def test_every_claim_of_every_builder_is_verified(knot, knot_proxies):
+    verdicts = vp.verify(*knot, knot_proxies)
+    assert len(verdicts) == len(knot_proxies)
+    for proxy, verdict in zip(knot_proxies, verdicts):
+        expected = {"outside": "contains the mesh", "inside": "lies within the mesh", "general": "none"}[proxy["kind"]]
+        assert verdict["claim"] == expected, proxy["name"]
+        assert verdict["holds"], (proxy["name"], verdict["counterexample"])
+        if proxy["kind"] != "general":
+            assert verdict["margin"] >= 0
+
+
+def test_a_proxy_edited_by_hand_is_judged_as_it_is(knot, knot_proxies):
+    vertices, _ = knot
+    hull = dict(next(p for p in knot_proxies if p["name"] == "hull"))
+    centre = vertices.mean(axis=0)
+    moved = hull["vertices"].copy()
+    far = int(np.argmax(np.linalg.norm(moved - centre, axis=1)))
+    moved[far] = centre + 0.5 * (moved[far] - centre)  # pulled halfway in: mesh vertices now outside
+    hull["vertices"] = moved
+    verdict = vp.verify(*knot, hull)[0]
+    assert not verdict["holds"]
+    assert verdict["margin"] < 0 and "vertex" in verdict["counterexample"]
+    # and an inside sphere grown past the surface
+    inside = dict(next(p for p in knot_proxies if p["name"] == "inside-10"))
+    grown = inside["spheres"].copy()
+    grown[0, 3] *= 1.01
+    inside["spheres"] = grown
+    verdict = vp.verify(*knot, inside)[0]
+    assert not verdict["holds"] and "sphere 0" in verdict["counterexample"]
+
+
+def test_an_outside_claim_made_for_a_proxy_that_is_not_outside_fails(knot):
+    vertices, triangles = knot
+    shrunk = vertices.mean(axis=0) + 0.9 * (vertices - vertices.mean(axis=0))
+    verdict = vp.verify(vertices, triangles, {"kind": "outside", "vertices": shrunk, "triangles": triangles})[0]
+    assert not verdict["holds"]
+
+
+def test_measure_gives_the_outside_and_inside_forms(knot, knot_proxies):
+    # Seed 3 draws a line that starts inside outer-64 where it reaches beyond the knot's
+    # bounding sphere, and hits the knot: the proxy must be traced on the whole line.
+    figures = vp.measure(*knot, knot_proxies, rays=20000, seed=3, timed_rays=2000)
+    assert len(figures) == len(knot_proxies)
+    for proxy, measured in zip(knot_proxies, figures):
+        assert measured["rays"]["count"] == 20000 and measured["rays"]["seed"] == 3
+        assert sum(measured["counts"]) == 20000
+        if proxy["kind"] == "outside":
+            assert measured["f_hit"]["value"] == 1.0 and measured["rays_contradicting_claim"] == 0
+        if proxy["kind"] == "inside":
+            assert measured["f_miss"]["value"] == 1.0 and measured["rays_contradicting_claim"] == 0
+        probabilities = measured["probabilities"]
+        assert probabilities["p1"] + probabilities["p2"] + probabilities["p3"] == pytest.approx(1.0)
+
+
+def test_the_same_seed_gives_the_same_proxies_and_the_calls_run_beside_other_threads(knot):
+    results = [None, None]
+
+    def build(slot):
+        results[slot] = vp.build(*knot, ["spheres:20", "wrap"], seed=5)
+
+    threads = [threading.Thread(target=build, args=(slot,)) for slot in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    for first, second in zip(*results):
+        assert np.array_equal(first["spheres"] if first["spheres"] is not None else first["vertices"],
+                              second["spheres"] if second["spheres"] is not None else second["vertices"])
+        assert first["manifest"]["error"] == second["manifest"]["error"]
+
+
+# ---- the CLI's output, bit for bit ----------------------------------------------------
+
+def test_build_verify_and_measure_equal_the_cli_bit_for_bit(tmp_path, knot):
+    specs = ["aabb", "hull:32", "outer:64", "quadric:200", "inside:10", "spheres:30"]
+    folder = tmp_path / "cli"
+    cli("build", KNOT, "-o", folder, "--seed", 11, *[f"--proxy={s}" for s in specs])
+    cli("verify", KNOT, folder)
+    cli("measure", KNOT, folder, "--rays", 20000, "--seed", 4, "--timed-rays", 1000)
+    from_cli = vp.read_proxies(folder)
+    ours = vp.build(*knot, specs, seed=11, output=tmp_path / "python", source=str(KNOT))
+    assert [p["name"] for p in ours] == [p["name"] for p in from_cli]
+    for mine, theirs in zip(ours, from_cli):
+        for key in ("vertices", "triangles", "spheres"):
+            if theirs[key] is None:
+                assert mine[key] is None
+            else:
+                assert mine[key].dtype == theirs[key].dtype and np.array_equal(mine[key], theirs[key]), (mine["name"], key)
+        for key in ("kind", "method", "params", "primitives", "error"):
+            assert mine["manifest"][key] == theirs["manifest"][key], (mine["name"], key)
+        # the files written from Python are the CLI's, byte for byte
+        name = theirs["manifest"]["file"]
+        assert (tmp_path / "python" / name).read_bytes() == (folder / name).read_bytes(), name
+    for mine, theirs in zip(vp.verify(*knot, ours), from_cli):
+        recorded = theirs["manifest"]["verify"]
+        for key in ("claim", "holds", "margin", "counterexample", "mesh_hash", "proxy_hash"):
+            assert mine[key] == recorded[key], (theirs["name"], key)
+    for mine, theirs in zip(vp.measure(*knot, ours, rays=20000, seed=4, timed_rays=1000), from_cli):
+        recorded = theirs["manifest"]["measure"]
+        for key in ("counts", "f_hit", "f_miss", "v_avg", "gssa_ratio", "probabilities", "variance", "rays"):
+            assert mine[key] == recorded[key], (theirs["name"], key)
+
+
+def write_scene(path, mesh_path):
+    scene = {
+        "format": "visproxy-scene", "format_version": 1,
+        "description": "A knot over a floor under a square light",
+        "meshes": {
+            "floor": {"positions": [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]], "triangles": [[0, 2, 1], [0, 3, 2]]},
+            "knot": {"file": str(mesh_path)},
+        },
+        "instances": [
+            {"mesh": "floor", "albedo": [0.7, 0.7, 0.7]},
+            {"mesh": "knot", "albedo": [0.7, 0.7, 0.7],
+             "transform": {"fit": {"base": [0, 0.1, 0], "height": 1.0}}, "proxies": ["hull:32", "inside:10"]},
+        ],
+        "lights": [{"type": "parallelogram", "corner": [-0.5, 3, -0.5], "edge1": [1, 0, 0], "edge2": [0, 0, 1],
+                    "radiance": [10, 10, 10]}],
+        "camera": {"from": [0, 2.5, 4], "at": [0, 0.5, 0], "up": [0, 1, 0], "fov_degrees": 45, "width": 40, "height": 30},
+    }
+    path.write_text(json.dumps(scene))
+
+
+def read_pfm(path):
+    data = path.read_bytes()
+    header, rest = data.split(b"\n", 1)
+    size, rest = rest.split(b"\n", 1)
+    scale, pixels = rest.split(b"\n", 1)
+    assert header == b"PF" and float(scale) < 0
+    width, height = map(int, size.split())
+    return np.frombuffer(pixels, dtype="<f4").reshape(height, width, 3)[::-1]
+
+
+@pytest.mark.parametrize("options", [["--visibility", "exact"],
+                                     ["--visibility", "stochastic", "--estimator", "control-variate",
+                                      "--probabilities", "learned"],
+                                     ["--visibility", "bounds"]])
+def test_render_equals_the_cli_image(tmp_path, options):
+    scene = tmp_path / "knot.json"
+    write_scene(scene, KNOT)
+    cache = tmp_path / "cache"
+    cli("render", scene, "-o", tmp_path / "cli.pfm", "--spp", 3, "--seed", 9, "--cache", cache, *options)
+    keywords = {options[i].lstrip("-").replace("-", "_"): options[i + 1] for i in range(0, len(options), 2)}
+    rendered = vp.render(scene, spp=3, seed=9, cache=cache, output=tmp_path / "python.pfm", **keywords)
+    image = rendered["image"]
+    assert image.shape == (30, 40, 3) and image.dtype == np.float64
+    assert np.isfinite(image).all() and image.max() > 0
+    assert np.array_equal(image.astype(np.float32), read_pfm(tmp_path / "cli.pfm"))
+    assert (tmp_path / "python.pfm").read_bytes() == (tmp_path / "cli.pfm").read_bytes()
+    assert rendered["stats"]["passes"] == 3
+    cli_stats = json.loads((tmp_path / "cli.stats.json").read_text())["stats"]
+    assert rendered["stats"]["shadow_rays"] == cli_stats["shadow_rays"]
+
+
+# ---- bad input: the CLI's one-line messages as exceptions ---------------------------
+
+def cli_message(*arguments):
+    result = cli(*arguments, check=False)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("visproxy: ")
+    return lines[0][len("visproxy: "):]
+
+
+def test_a_missing_file_raises_file_error_with_the_cli_message(tmp_path):
+    missing = tmp_path / "missing.off"
+    with pytest.raises(vp.FileError) as raised:
+        vp.read_mesh(missing)
+    assert isinstance(raised.value, OSError) and isinstance(raised.value, vp.Error)
+    assert str(raised.value) == cli_message("info", missing)
+
+
+@pytest.mark.parametrize("name,content", [
+    ("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n"),
+    ("bad-index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"),
+    ("nan.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n"),
+    ("header.ply", "ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n"),
+    ("empty.stl", ""),
+])
+def test_a_malformed_file_raises_invalid_input_with_the_cli_message(tmp_path, name, content):
+    path = tmp_path / name
+    path.write_text(content)
+    with pytest.raises(vp.InvalidInputError) as raised:
+        vp.read_mesh(path)
+    assert isinstance(raised.value, ValueError)
+    message = str(raised.value)
+    assert str(path) in message and "\n" not in message
+    assert message == cli_message("info", path)
+
+
+def test_a_bad_spec_and_a_builder_refusal_give_the_cli_message(tmp_path):
+    vertices, triangles = vp.read_mesh(ELEPHANT)
+    with pytest.raises(vp.Error) as raised:
+        vp.build(vertices, triangles, ["hull:many"])
+    assert str(raised.value) == cli_message("build", ELEPHANT, "-o", tmp_path / "a", "--proxy", "hull:many")
+    with pytest.raises(vp.InvalidInputError) as raised:
+        vp.build(vertices, triangles, ["inside:10"], source=str(ELEPHANT))
+    assert str(raised.value) == cli_message("build", ELEPHANT, "-o", tmp_path / "b", "--proxy", "inside:10")
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+@pytest.mark.parametrize("vertices,triangles,expected", [
+    (np.zeros((3, 2)), np.array([[0, 1, 2]]), "vertices: must have shape (N, 3)"),
+    (np.zeros((3, 3)), np.array([[0.0, 1.0, 2.0]]), "triangles: must hold integer vertex indices, not float64"),
+    (np.zeros((3, 3)), np.array([[0, 1, 3]]), "triangles[0, 2]: vertex index 3 is out of range (3 vertices)"),
+    (np.zeros((3, 3)), np.array([[0, -1, 2]]), "triangles[0, 1]: vertex index -1 is out of range (3 vertices)"),
+    (np.zeros((3, 3)), np.array([[0, 1, 2**64 - 1]], dtype=np.uint64), "triangles[0, 2]: vertex index 18446744073709551615"),
+    (np.array([[0, 0, 0], [1, 0, 0], [np.inf, 1, 0]]), np.array([[0, 1, 2]]), "vertex 2"),
+    (np.array([["a", "b", "c"]] * 3), np.array([[0, 1, 2]]), "vertices: must hold real numbers"),
+])
+def test_bad_arrays_raise_invalid_input_naming_the_array(vertices, triangles, expected):
+    with pytest.raises(vp.InvalidInputError) as raised:
+        vp.inspect(vertices, triangles, source="my arrays")
+    assert str(raised.value).startswith("my arrays: ") and expected in str(raised.value)
+
+
+def test_bad_proxy_dicts_and_options_raise(knot):
+    with pytest.raises(vp.InvalidInputError, match="needs a kind"):
+        vp.verify(*knot, {"vertices": knot[0], "triangles": knot[1]})
+    with pytest.raises(vp.InvalidInputError, match="spheres\\[1\\]: needs a finite centre and a positive finite radius"):
+        vp.verify(*knot, {"kind": "inside", "spheres": np.array([[0, 0, 0, 0.1], [0, 0, 0, -1.0]])})
+    with pytest.raises(TypeError):
+        vp.verify(*knot, [42])
+    with pytest.raises(ValueError, match="visibility: 'fast' is not one of"):
+        vp.render(SOURCE / "data/scenes/cornell.json", visibility="fast")
+    with pytest.raises(ValueError, match="learned needs"):
+        vp.render(SOURCE / "data/scenes/cornell.json", probabilities="learned")
+    with pytest.raises(vp.InvalidInputError, match="unsupported image format"):
+        vp.render(SOURCE / "data/scenes/cornell.json", output="image.jpg")
