@@ -1,0 +1,239 @@
+#include "visproxy/runtime/runtime.h"
+
+#include <embree3/rtcore.h>
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+
+#include "visproxy/core/errors.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
+#include "visproxy/proxy/build_proxies.h"
+#include "visproxy/proxy/manifest.h"
+#include "test_meshes.h"
+#include "test_support.h"
+
+namespace visproxy {
+namespace {
+
+// A proxy folder of the knot (hull:32, inside:10), written as `visproxy build` writes it.
+class Runtime : public testing::ScratchFolder {
+ protected:
+  void SetUp() override {
+    ScratchFolder::SetUp();
+    mesh_path_ = testing::cgal_mesh("knot1.off");
+    knot_ = read_mesh(mesh_path_);
+    const std::vector<ProxySpec> specs = parse_proxy_specs({"hull:32", "inside:10"});
+    BuildOptions options;
+    options.hausdorff_samples = 200;
+    options.gssa_lines = 1000;
+    const std::vector<BuiltProxy> proxies = build_proxies(knot_, mesh_path_, specs, options);
+    write_proxy_folder(folder_, {.path = mesh_path_, .weld = "auto", .vertices = knot_.positions.size(),
+                                 .triangles = knot_.triangles.size(), .components = 1, .bounds = bounding_box(knot_)},
+                       proxies, options);
+  }
+
+  std::string load_error(std::string_view name, const std::filesystem::path& mesh, RuntimeLoadOptions options = {}) {
+    try {
+      RuntimeProxy::load(folder_, name, mesh, options);
+      return "loaded";
+    } catch (const InvalidInputError& error) {
+      return error.what();
+    }
+  }
+
+  std::filesystem::path mesh_path_;
+  TriangleMesh knot_;
+};
+
+TEST_F(Runtime, LoadsAProvedProxyAndRefusesWhatIsNotProved) {
+  const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);  // verified on load
+  EXPECT_EQ(hull.kind(), ProxyKind::outside);
+  EXPECT_TRUE(hull.note().empty());
+  EXPECT_EQ(RuntimeProxy::load(folder_, "inside-10", mesh_path_).kind(), ProxyKind::inside);
+  EXPECT_EQ(RuntimeProxy::load(folder_, "inside-10", mesh_path_).sphere_set().size(), 10u);
+
+  // No recorded verdict and no verifying now: not proved.
+  EXPECT_NE(load_error("hull-32", mesh_path_, {.require_proof = true, .verify_now = false}).find("is not proved"),
+            std::string::npos);
+  const RuntimeProxy general = RuntimeProxy::load(folder_, "hull-32", mesh_path_, {.require_proof = false, .verify_now = false});
+  EXPECT_EQ(general.kind(), ProxyKind::general);
+  EXPECT_NE(general.note().find("used as a general proxy"), std::string::npos);
+
+  EXPECT_NE(load_error("hull-33", mesh_path_).find("no proxy named 'hull-33' (it lists hull-32, inside-10)"), std::string::npos);
+  const std::string other = load_error("hull-32", testing::cgal_mesh("knot2.off"));
+  EXPECT_NE(other.find("knot2.off"), std::string::npos) << other;
+}
+
+TEST_F(Runtime, AHullEditedByHandIsRefusedWithItsCounterexample) {
+  TriangleMesh hull = read_mesh(folder_ / "hull-32.ply", {.weld = Weld::never, .on_warning = {}});
+  Vertex center = Vertex::Zero();
+  for (const Vertex& p : hull.positions) center += p / static_cast<double>(hull.positions.size());
+  for (Vertex& p : hull.positions) p = center + 0.97 * (p - center);  // pulled in: mesh vertices now outside
+  write_mesh(folder_ / "hull-32.ply", hull);
+  const std::string error = load_error("hull-32", mesh_path_);
+  EXPECT_NE(error.find("hull-32.ply: proxy hull-32: its outside claim (contains the mesh) is not proved"), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("vertex"), std::string::npos) << error;
+  EXPECT_EQ(RuntimeProxy::load(folder_, "hull-32", mesh_path_, {.require_proof = false}).kind(), ProxyKind::general);
+}
+
+// Embree scenes in the float coordinates a user's renderer hands over.
+struct EmbreeWorld {
+  RTCDevice device = rtcNewDevice(nullptr);
+  RTCScene proxy = rtcNewScene(device), mesh = rtcNewScene(device);
+  ~EmbreeWorld() {
+    rtcReleaseScene(proxy);
+    rtcReleaseScene(mesh);
+    rtcReleaseDevice(device);
+  }
+  void add_mesh(const TriangleMesh& m, const Eigen::Affine3d& t) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, m.positions.size()));
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+      const Vertex p = t * m.positions[i];
+      for (int k = 0; k < 3; ++k) v[3 * i + static_cast<std::size_t>(k)] = static_cast<float>(p[k]);
+    }
+    auto* f = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, m.triangles.size()));
+    for (std::size_t i = 0; i < m.triangles.size(); ++i)
+      for (std::size_t k = 0; k < 3; ++k) f[3 * i + k] = m.triangles[i][k];
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(mesh, g);
+    rtcReleaseGeometry(g);
+  }
+  static bool occluded(RTCScene scene, const Vertex& from, const Vertex& to) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    const Vertex d = to - from;
+    RTCRay ray{};
+    ray.org_x = float(from.x()), ray.org_y = float(from.y()), ray.org_z = float(from.z());
+    ray.dir_x = float(d.x()), ray.dir_y = float(d.y()), ray.dir_z = float(d.z());
+    ray.tnear = 0, ray.tfar = 1, ray.mask = ~0u;
+    rtcOccluded1(scene, &context, &ray);
+    return ray.tfar < 0;
+  }
+};
+
+// Far from the origin, in float, the hull must still block every segment the mesh blocks
+// (and the balls must block none that it lets through), on segments aimed where rounding
+// bites: through the mesh's vertices on the hull (where the two surfaces touch) and along
+// the balls' silhouettes.
+TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
+  const Eigen::Affine3d far = Eigen::Translation3d(2.0e4, -1.5e4, 3.0e4) * Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized());
+  const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
+  const RuntimeProxy inside = RuntimeProxy::load(folder_, "inside-10", mesh_path_);
+  const PlacedProxy placed_hull = hull.place({.transform = far});
+  const PlacedProxy placed_inside = inside.place({.transform = far});
+  ASSERT_EQ(placed_hull.kind(), ProxyKind::outside) << placed_hull.note();
+  ASSERT_EQ(placed_inside.kind(), ProxyKind::inside) << placed_inside.note();
+  EXPECT_GT(placed_hull.rounding_bound(), 1e-3);  // 2^-21 of 3e4: coarse floats
+
+  EmbreeWorld hull_world, ball_world;
+  hull_world.add_mesh(knot_, far);
+  ball_world.add_mesh(knot_, far);
+  placed_hull.attach(hull_world.device, hull_world.proxy);
+  placed_inside.attach(ball_world.device, ball_world.proxy);
+  for (RTCScene s : {hull_world.proxy, hull_world.mesh, ball_world.proxy, ball_world.mesh}) rtcCommitScene(s);
+
+  std::mt19937_64 random(42);
+  std::normal_distribution<double> normal;
+  auto direction = [&] { return Vertex(normal(random), normal(random), normal(random)).normalized(); };
+  const BoundingBox box = bounding_box(knot_);
+  const double reach = 2 * box.diagonal();
+  // Mesh vertices on the hull: the farthest along random directions.
+  std::size_t hull_segments = 0, mesh_hits = 0, hull_misses_where_mesh_hits = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Vertex d = direction();
+    const Vertex* extreme = &knot_.positions[0];
+    for (const Vertex& p : knot_.positions)
+      if (p.dot(d) > extreme->dot(d)) extreme = &p;
+    const Vertex through = far * *extreme;
+    const Vertex along = (far.linear() * d.cross(direction())).normalized();  // tangent to the hull there
+    const Vertex jitter = 1e-3 * box.diagonal() * normal(random) * (far.linear() * d);
+    const Vertex from = through + jitter - reach * along, to = through + jitter + reach * along;
+    ASSERT_TRUE(placed_hull.claim_covers(from, to));
+    ++hull_segments;
+    if (EmbreeWorld::occluded(hull_world.mesh, from, to)) {
+      ++mesh_hits;
+      if (!EmbreeWorld::occluded(hull_world.proxy, from, to)) ++hull_misses_where_mesh_hits;
+    }
+  }
+  EXPECT_GT(mesh_hits, 100u);
+  EXPECT_EQ(hull_misses_where_mesh_hits, 0u) << "of " << mesh_hits << " segments the mesh blocks";
+
+  std::size_t ball_hits = 0, balls_hit_where_mesh_misses = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Sphere& s = inside.sphere_set()[static_cast<std::size_t>(i) % inside.sphere_set().size()];
+    const Vertex d = direction(), side = d.cross(direction()).normalized();
+    const Vertex grazing = far * (s.center + s.radius * (1 + 1e-4 * normal(random)) * side);
+    const Vertex along = far.linear() * d;
+    const Vertex from = grazing - reach * along, to = grazing + reach * along;
+    ASSERT_TRUE(placed_inside.claim_covers(from, to));
+    if (EmbreeWorld::occluded(ball_world.proxy, from, to)) {
+      ++ball_hits;
+      if (!EmbreeWorld::occluded(ball_world.mesh, from, to)) ++balls_hit_where_mesh_misses;
+    }
+  }
+  EXPECT_GT(ball_hits, 100u);
+  EXPECT_EQ(balls_hit_where_mesh_misses, 0u) << "of " << ball_hits << " segments the balls block";
+}
+
+// E[estimate] over u, exactly: the estimate is constant on each interval of u between the
+// breakpoints, so sum each interval's length times its value.
+template <class Estimate>
+double mean_over_u(const std::vector<double>& breakpoints, Estimate&& estimate) {
+  double mean = 0, begin = 0;
+  for (double end : breakpoints) {
+    if (end > begin) mean += (end - begin) * estimate(0.5 * (begin + end));
+    begin = std::max(begin, end);
+  }
+  return mean;
+}
+
+TEST_F(Runtime, EstimatesAreUnbiasedWhereTheClaimCoversASegmentAndWhereItDoesNot) {
+  const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
+  const PlacedProxy placed = hull.place();
+  const ShadowEstimator estimator(placed);
+  const BoundingBox box = bounding_box(knot_);
+  const Vertex centre = 0.5 * (box.min + box.max);
+  const Vertex far_a = centre + Vertex(10, 0, 0) * box.diagonal(), far_b = centre + Vertex(0, 10, 0) * box.diagonal();
+  // A light inside the hull (between the knot's strands: in the hull, not in the mesh).
+  ASSERT_EQ(estimator.form(far_a, far_b), ProxyKind::outside);
+  ASSERT_EQ(estimator.form(centre, far_b), ProxyKind::general);
+  ASSERT_EQ(estimator.form(far_a, centre), ProxyKind::general);
+
+  const Probabilities outside = equal_probabilities(ProxyKind::outside), general = equal_probabilities(ProxyKind::general);
+  for (const auto& [from, to, form] : {std::tuple{far_a, far_b, outside}, std::tuple{centre, far_b, general}}) {
+    for (const bool proxy_hit : {false, true})
+      for (const bool mesh_hit : {false, true}) {
+        // Where the claim covers the segment, the mesh cannot block what the hull lets through.
+        if (estimator.form(from, to) == ProxyKind::outside && mesh_hit && !proxy_hit) continue;
+        auto proxy = [&](const Vertex&, const Vertex&) { return proxy_hit; };
+        auto mesh = [&](const Vertex&, const Vertex&) { return mesh_hit; };
+        const double exact = mesh_hit ? 0.0 : 1.0;
+        const double eq8 = mean_over_u({form.p1, form.p1 + form.p2, 1.0},
+                                       [&](double u) { return estimator.eq8(from, to, u, proxy, mesh); });
+        EXPECT_NEAR(eq8, exact, 1e-12) << "proxy " << proxy_hit << " mesh " << mesh_hit;
+        LearnedCorrections learned;
+        learned.record(true, true);  // some evidence, so that q is not 1/2 everywhere
+        const CorrectionProbabilities q = learned.probabilities(estimator.form(from, to));
+        const double chance = proxy_hit ? q.after_hit : q.after_miss;
+        const double cv = mean_over_u({chance, 1.0}, [&](double u) {
+          LearnedCorrections copy = learned;
+          return estimator.control_variate(from, to, u, copy, proxy, mesh);
+        });
+        EXPECT_NEAR(cv, exact, 1e-12) << "proxy " << proxy_hit << " mesh " << mesh_hit;
+      }
+  }
+  // The light inside the hull, with the mesh in the way and the hull's surface not crossed
+  // (type 2): the outside form would give 1, the estimator gives 0 on average.
+  auto misses = [](const Vertex&, const Vertex&) { return false; };
+  auto blocks = [](const Vertex&, const Vertex&) { return true; };
+  const double mean = mean_over_u({general.p1, general.p1 + general.p2, 1.0},
+                                  [&](double u) { return estimator.eq8(centre, far_b, u, misses, blocks); });
+  EXPECT_NEAR(mean, 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace visproxy
