@@ -17,3 +17,13 @@ function(visproxy_add_cgal_meshes)
     VERBATIM)
   add_custom_target(cgal_meshes ALL DEPENDS ${outputs})
 endfunction()
+
+# The target `assimp_models` (part of ALL) unpacks Debian's assimp-testmodels into
+# ${VISPROXY_ASSIMP_MODEL_DIR} (build tree) with cmake/fetch_assimp_models.sh.
+set(VISPROXY_ASSIMP_MODEL_DIR "${CMAKE_BINARY_DIR}/assimp-testmodels/models" CACHE INTERNAL "Unpacked assimp-testmodels")
+add_custom_command(
+  OUTPUT "${CMAKE_BINARY_DIR}/assimp-testmodels/.unpacked"
+  COMMAND "${CMAKE_CURRENT_SOURCE_DIR}/cmake/fetch_assimp_models.sh" "${CMAKE_BINARY_DIR}/assimp-testmodels"
+  COMMENT "Unpacking Debian's assimp-testmodels into ${CMAKE_BINARY_DIR}/assimp-testmodels"
+  VERBATIM)
+add_custom_target(assimp_models ALL DEPENDS "${CMAKE_BINARY_DIR}/assimp-testmodels/.unpacked")

@@ -15,7 +15,7 @@ packages="build-essential cmake ninja-build ccache pkg-config
   libcgal-dev libtet1.5-dev libopenmesh-dev libembree-dev libeigen3-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   libmeshoptimizer-dev libpng-dev libopenexr-dev
-  python3-dev pybind11-dev python3-numpy"
+  python3-dev pybind11-dev python3-numpy libassimp-dev"
 # The test suite opens the HTML report in headless Chromium and runs the Python tests.
 if [ "$mode" = test ]; then packages="$packages chromium python3-pytest"; fi
 
@@ -28,9 +28,9 @@ as_root() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
 
-# The meshes come from the libcgal-demo package (downloaded, not installed): apt needs
-# package lists for that even when nothing is missing.
-if [ -n "$missing" ] || ! apt-cache show libcgal-demo >/dev/null 2>&1; then
+# The meshes come from the libcgal-demo and assimp-testmodels packages (downloaded, not
+# installed): apt needs package lists for that even when nothing is missing.
+if [ -n "$missing" ] || ! apt-cache show libcgal-demo assimp-testmodels >/dev/null 2>&1; then
   as_root apt-get update
 fi
 if [ -n "$missing" ]; then

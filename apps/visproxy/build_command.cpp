@@ -78,7 +78,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
       "Build visibility proxies of a mesh: one binary PLY and one OBJ per proxy (sphere proxies: a JSON sphere set "
       "and a PLY of their icospheres) in DIR, listed in DIR/manifest.json "
       "(schema: data/schemas/manifest.schema.json) with kind, parameters, primitive count, build time and error.");
-  command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl)")->required();
+  command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl, or through Assimp .gltf, .glb, .fbx, .dae, .3ds, ...)")->required();
   command->add_option("-o,--output", options->folder, "Output folder (created if missing)")->required();
   command->add_option("--proxy", options->proxies,
                       "Proxy to build (repeatable). aabb, obb, hull, hull:N (convex, at most N faces), wrap, "
@@ -94,7 +94,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
   const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
   command
       ->add_option("--weld", options->weld,
-                   "Merge vertices with identical coordinates: auto (STL only), never, always [default: auto]")
+                   "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
       ->transform(CLI::CheckedTransformer(weld_modes, CLI::ignore_case));
   command->add_option("--seed", options->seed, "Seed of every random choice (error samples, box search) [default: 1]");
   command

@@ -37,8 +37,9 @@ void print_report(const InfoOptions& options, MeshFormat format, double read_sec
     return std::string(text);
   };
 
-  std::printf("mesh %s (%s, read in %.1f ms)\n", options.mesh.string().c_str(), std::string(format_name(format)).c_str(),
-              1e3 * read_seconds);
+  std::string format_text(format_name(format));
+  if (format == MeshFormat::assimp) format_text += " " + options.mesh.extension().string().substr(1);
+  std::printf("mesh %s (%s, read in %.1f ms)\n", options.mesh.string().c_str(), format_text.c_str(), 1e3 * read_seconds);
   row("vertices", count(report.vertices) +
                       (report.unreferenced_vertices ? " (" + count(report.unreferenced_vertices) + " unreferenced)" : ""));
   row("triangles", count(report.triangles));
@@ -89,12 +90,12 @@ void add_info_command(CLI::App& app, int& exit_code) {
       "info", "Validate a mesh: counts, bounds, components, boundary and non-manifold edges and vertices, "
               "orientation, degenerate triangles, self-intersections, area, volume, a watertight verdict, and whether it bounds "
               "a solid (closed: every edge used as often in each direction, which inside proxies need).");
-  command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl)")->required();
+  command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl, or through Assimp .gltf, .glb, .fbx, .dae, .3ds, ...)")->required();
   command->add_flag("--json", options->json, "Print one JSON object (schema: data/schemas/info.schema.json)");
   const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
   command
       ->add_option("--weld", options->weld,
-                   "Merge vertices with identical coordinates: auto (STL only), never, always [default: auto]")
+                   "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
       ->transform(CLI::CheckedTransformer(weld_modes, CLI::ignore_case));
 
   command->callback([options, &exit_code] {

@@ -104,4 +104,12 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
 TriangleMesh parse_off(std::string_view bytes, const std::filesystem::path& source);
 TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& source);
 
+/// Whether Assimp reads files with this extension (read_assimp.cpp).
+bool assimp_reads(const std::filesystem::path& path);
+/// A file in a format Assimp reads, its nodes flattened into one mesh in world space.
+/// Reads from the file system, so that glTF's external buffers are found beside it.
+TriangleMesh read_assimp_file(const std::filesystem::path& path);
+/// The same from bytes; the extension of `source` tells Assimp the format.
+TriangleMesh parse_assimp(std::string_view bytes, const std::filesystem::path& source);
+
 }  // namespace visproxy::parsing

@@ -19,6 +19,7 @@ std::string_view format_name(MeshFormat format) {
     case MeshFormat::ply: return "PLY";
     case MeshFormat::off: return "OFF";
     case MeshFormat::stl: return "STL";
+    case MeshFormat::assimp: return "Assimp";
   }
   return "unknown";
 }
@@ -31,8 +32,21 @@ std::optional<MeshFormat> format_from_extension(const std::filesystem::path& pat
   if (extension == ".ply") return MeshFormat::ply;
   if (extension == ".off") return MeshFormat::off;
   if (extension == ".stl") return MeshFormat::stl;
+  if (parsing::assimp_reads(path)) return MeshFormat::assimp;
   return std::nullopt;
 }
+
+namespace {
+
+TriangleMesh finish(TriangleMesh mesh, MeshFormat format, const std::filesystem::path& source, const ReadMeshOptions& options) {
+  require_coordinates_in_range(mesh, source);
+  const bool weld = options.weld == Weld::always ||
+                    (options.weld == Weld::automatic && (format == MeshFormat::stl || format == MeshFormat::assimp));
+  if (weld) return weld_vertices(mesh);
+  return mesh;  // moved, not copied
+}
+
+}  // namespace
 
 TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::filesystem::path& source,
                         const ReadMeshOptions& options) {
@@ -49,11 +63,9 @@ TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::fi
     case MeshFormat::ply: mesh = parsing::parse_ply(bytes, source, options.on_warning); break;
     case MeshFormat::off: mesh = parsing::parse_off(bytes, source); break;
     case MeshFormat::stl: mesh = parsing::parse_stl(bytes, source); break;
+    case MeshFormat::assimp: mesh = parsing::parse_assimp(bytes, source); break;
   }
-  require_coordinates_in_range(mesh, source);
-  const bool weld = options.weld == Weld::always || (options.weld == Weld::automatic && format == MeshFormat::stl);
-  if (weld) return weld_vertices(mesh);
-  return mesh;  // moved, not copied
+  return finish(std::move(mesh), format, source, options);
 }
 
 TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions& options) {
@@ -61,7 +73,11 @@ TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions&
   if (!format)
     throw InvalidInputError(path, "unknown mesh file extension " +
                                       (path.extension().empty() ? std::string("(none)") : "'" + path.extension().string() + "'") +
-                                      "; expected .obj, .ply, .off or .stl");
+                                      "; expected .obj, .ply, .off, .stl or a format Assimp reads (.gltf, .glb, .fbx, .dae, .3ds, ...)");
+  if (*format == MeshFormat::assimp) {
+    if (!std::filesystem::is_regular_file(path)) read_file(path);  // the IOError a missing file gets
+    return finish(parsing::read_assimp_file(path), *format, path, options);
+  }
   const std::string bytes = read_file(path);
   return parse_mesh(bytes, *format, path, options);
 }

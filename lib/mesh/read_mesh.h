@@ -15,16 +15,18 @@
 
 namespace visproxy {
 
-enum class MeshFormat { obj, ply, off, stl };
+/// assimp: every other format Debian's Assimp reads (glTF 2.0 .gltf/.glb, FBX, Collada
+/// .dae, 3DS, Blender, X, LightWave, ...).
+enum class MeshFormat { obj, ply, off, stl, assimp };
 
-/// "OBJ", "PLY", "OFF" or "STL".
+/// "OBJ", "PLY", "OFF", "STL" or "Assimp".
 std::string_view format_name(MeshFormat format);
 
 /// The format implied by a file's extension (case-insensitive), or nullopt if unknown.
 std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path);
 
 enum class Weld {
-  automatic,  ///< merge identical vertices for STL only, which stores each triangle's corners apart
+  automatic,  ///< merge identical vertices for STL and Assimp's formats only, which split corners (STL: every one; glTF, FBX, ...: at normal and texture seams)
   never,      ///< keep the vertices as the file lists them
   always,     ///< merge vertices with identical coordinates in every format
 };
@@ -50,6 +52,9 @@ struct ReadMeshOptions {
 /// - OFF: OFF, COFF, NOFF, CNOFF, STOFF headers; `#` comments; per-vertex and per-face
 ///   extras (colours) ignored; polygons triangulated as for OBJ.
 /// - STL: ASCII and binary (recognised by size, whatever the header says).
+/// - Assimp's formats: the scene's node hierarchy flattened, each node's meshes placed by
+///   the transforms down to it; polygons triangulated, points and lines dropped. Assimp's
+///   own refusal becomes an InvalidInputError ("FILE: Assimp cannot read it: ...").
 /// Throws IOError if the file cannot be read and InvalidInputError if its content is
 /// wrong, including a mesh without a single face and coordinates beyond kMaxCoordinate
 /// (1e100).

@@ -543,8 +543,8 @@ PYBIND11_MODULE(visproxy, m) {
   });
 
   m.def("read_mesh", &read_mesh_arrays, "path"_a, "weld"_a = "auto",
-        "Reads an OBJ, PLY, OFF or STL mesh as (vertices, triangles): (V, 3) float64 and (T, 3) int64. weld: 'auto' "
-        "(merge identical vertices for STL only), 'never' or 'always'. Raises InvalidInputError naming the file (and "
+        "Reads a mesh (OBJ, PLY, OFF, STL, or glTF, FBX, Collada, 3DS, ... through Assimp) as (vertices, triangles): (V, 3) float64 and (T, 3) int64. weld: 'auto' "
+        "(merge identical vertices for STL and Assimp's formats only), 'never' or 'always'. Raises InvalidInputError naming the file (and "
         "line) for malformed content, FileError when it cannot be read.");
   m.def("write_mesh", &write_mesh_arrays, "path"_a, "vertices"_a, "triangles"_a,
         "Writes a mesh as binary PLY (double coordinates) or OBJ (shortest round-trip decimals) by the extension, exactly, under a temporary name then renamed.");

@@ -81,7 +81,12 @@ INSTANTIATE_TEST_SUITE_P(
                   "expected 'vertex' or 'endloop'"},
         Malformed{"no-faces.obj", "v 0 0 0\nv 1 0 0\n", "contains no faces"},
         Malformed{"bad-format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format"},
-        Malformed{"model.3ds", "3DS", "unknown mesh file extension '.3ds'"},
+        Malformed{"model.txt", "3DS", "unknown mesh file extension '.txt'"},
+        Malformed{"model.3ds", "3DS", "Assimp cannot read it"},
+        Malformed{"model.glb", "glTF" + binary_garbage(100), "Assimp cannot read it"},
+        Malformed{"model.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": 7}", "Assimp cannot read it"},
+        Malformed{"model.dae", "<?xml version=\"1.0\"?><COLLADA><library_geometries>", "Assimp cannot read it"},
+        Malformed{"model.fbx", "Kaydara FBX Binary  \x00\x1a\x00" + binary_garbage(64), "Assimp cannot read it"},
         Malformed{"missing.off", "", "cannot open", false},
         Malformed{"folder.off", "", "not a regular file", false}),
     [](const ::testing::TestParamInfo<Malformed>& param_info) { return testing::test_name_from(param_info.param.file); });

@@ -82,3 +82,42 @@ TEST_F(CliInfoWarnings, BlenderPlyHeaderLineIsReportedOnStderr) {
 
 }  // namespace
 }  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+// Assimp's formats through the CLI: a glTF 2.0 binary model and a Collada one are read,
+// built and verified; every file of assimp-testmodels' `invalid/` folder gets one line
+// naming it and exit code 2.
+TEST(CliInfo, AssimpFormatsAreReadAndBrokenFilesGetOneLineAndExitTwo) {
+  const std::filesystem::path models = VISPROXY_ASSIMP_MODEL_DIR;
+  const std::filesystem::path engine = models / "glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+  const auto info = testing::run_visproxy("info --json '" + engine.string() + "'");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const nlohmann::json json = nlohmann::json::parse(info.out);
+  EXPECT_EQ(json.at("format"), "Assimp");
+  EXPECT_EQ(json.at("triangles"), 121496);
+  EXPECT_EQ(json.at("components"), 86);  // the engine's parts, placed by their nodes and welded
+  testing::expect_described(json, "info.schema.json");
+  const auto folder = std::filesystem::temp_directory_path() / ("visproxy-assimp-" + std::to_string(::getpid()));
+  const auto build = testing::run_visproxy("build '" + engine.string() + "' -o '" + folder.string() + "' --proxy hull:64");
+  ASSERT_EQ(build.exit_code, 0) << build.err;
+  const auto verify = testing::run_visproxy("verify '" + engine.string() + "' '" + folder.string() + "'");
+  EXPECT_EQ(verify.exit_code, 0) << verify.out << verify.err;
+  std::filesystem::remove_all(folder);
+
+  int refused = 0;
+  for (const auto& item : std::filesystem::directory_iterator(models / "invalid")) {
+    if (!item.is_regular_file()) continue;
+    const auto result = testing::run_visproxy("info '" + item.path().string() + "'");
+    EXPECT_EQ(result.exit_code, 2) << item.path() << result.out << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_EQ(result.err.rfind("visproxy: " + item.path().string() + ":", 0), 0u) << result.err;
+    EXPECT_TRUE(result.out.empty()) << result.out;
+    ++refused;
+  }
+  EXPECT_GE(refused, 10);
+}
+
+}  // namespace
+}  // namespace visproxy

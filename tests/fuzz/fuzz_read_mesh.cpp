@@ -1,7 +1,8 @@
 // libFuzzer target for the mesh readers: visproxy::parse_mesh on arbitrary bytes.
 //
-// The first byte of an input selects the format (its value modulo 4: 0 OBJ, 1 PLY, 2 OFF,
-// 3 STL); the rest is the file's content. A reader may reject its input only by throwing
+// The first byte of an input selects the format (its value modulo 8: 0 OBJ, 1 PLY, 2 OFF,
+// 3 STL, and through Assimp 4 glTF, 5 binary glTF, 6 FBX, 7 Collada); the rest is the
+// file's content. A reader may reject its input only by throwing
 // visproxy::Error; anything else escaping (another exception, a crash, a sanitizer report)
 // is a bug, as is a mesh that breaks the invariants checked below.
 //
@@ -25,19 +26,25 @@ namespace {
   std::abort();
 }
 
-constexpr visproxy::MeshFormat kFormats[] = {visproxy::MeshFormat::obj, visproxy::MeshFormat::ply,
-                                             visproxy::MeshFormat::off, visproxy::MeshFormat::stl};
+struct FuzzedFormat {
+  visproxy::MeshFormat format;
+  const char* source;  // Assimp takes the format from the name's extension
+};
+constexpr FuzzedFormat kFormats[] = {{visproxy::MeshFormat::obj, "fuzz-input.obj"},  {visproxy::MeshFormat::ply, "fuzz-input.ply"},
+                                     {visproxy::MeshFormat::off, "fuzz-input.off"},  {visproxy::MeshFormat::stl, "fuzz-input.stl"},
+                                     {visproxy::MeshFormat::assimp, "fuzz-input.gltf"}, {visproxy::MeshFormat::assimp, "fuzz-input.glb"},
+                                     {visproxy::MeshFormat::assimp, "fuzz-input.fbx"},  {visproxy::MeshFormat::assimp, "fuzz-input.dae"}};
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
-  const visproxy::MeshFormat format = kFormats[data[0] % 4];
+  const FuzzedFormat& format = kFormats[data[0] % 8];
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
 
   visproxy::TriangleMesh mesh;
   try {
-    mesh = visproxy::parse_mesh(bytes, format, "fuzz-input");
+    mesh = visproxy::parse_mesh(bytes, format.format, format.source);
   } catch (const visproxy::Error&) {
     return 0;  // rejected input: the expected outcome for most of it
   }

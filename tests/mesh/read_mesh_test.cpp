@@ -199,7 +199,13 @@ TEST(ReadMesh, FormatFromExtensionIgnoresCase) {
   EXPECT_EQ(format_from_extension("x.Obj"), MeshFormat::obj);
   EXPECT_EQ(format_from_extension("x.stl"), MeshFormat::stl);
   EXPECT_EQ(format_from_extension("x.off"), MeshFormat::off);
-  EXPECT_FALSE(format_from_extension("x.3ds").has_value());
+  EXPECT_EQ(format_from_extension("x.3DS"), MeshFormat::assimp);
+  EXPECT_EQ(format_from_extension("x.glb"), MeshFormat::assimp);
+  EXPECT_EQ(format_from_extension("x.gltf"), MeshFormat::assimp);
+  EXPECT_EQ(format_from_extension("x.Dae"), MeshFormat::assimp);
+  EXPECT_EQ(format_from_extension("x.fbx"), MeshFormat::assimp);
+  EXPECT_FALSE(format_from_extension("x.txt").has_value());
+  EXPECT_FALSE(format_from_extension("x.png").has_value());
   EXPECT_FALSE(format_from_extension("noextension").has_value());
 }
 
@@ -315,8 +321,9 @@ TEST(ReadMesh, CoordinatesBeyondWhatDoublesCanSquareAreRefused) {
 }
 
 TEST(ReadMesh, UnknownExtensionAndMissingFile) {
-  EXPECT_THROW(read_mesh("mesh.3ds"), InvalidInputError);
+  EXPECT_THROW(read_mesh("mesh.txt"), InvalidInputError);
   EXPECT_THROW(read_mesh("/nonexistent/mesh.off"), IOError);
+  EXPECT_THROW(read_mesh("/nonexistent/mesh.glb"), IOError);  // Assimp's formats too
   EXPECT_THROW(read_mesh(VISPROXY_SOURCE_DIR), InvalidInputError);  // no extension
 }
 
