@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -106,6 +107,13 @@ TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& sour
 
 /// Whether Assimp reads files with this extension (read_assimp.cpp).
 bool assimp_reads(const std::filesystem::path& path);
+/// Runs `read` (which calls Assimp) in a child process limited to 1 GiB plus 64 x
+/// `input_bytes` of memory more than this process holds (VISPROXY_ASSIMP_MEMORY_MB
+/// overrides it) and 300 s of processor time, and returns the mesh it made. Its refusal,
+/// a crash or a limit reached throws InvalidInputError naming `source`. Where no process
+/// can be started, `read` runs here.
+TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
+                             const std::function<TriangleMesh()>& read);
 /// A file in a format Assimp reads, its nodes flattened into one mesh in world space.
 /// Reads from the file system, so that glTF's external buffers are found beside it.
 TriangleMesh read_assimp_file(const std::filesystem::path& path);

@@ -2,14 +2,30 @@
 // and the rest (Debian's libassimp). The node hierarchy is flattened: each node's meshes
 // placed by the product of the transforms down to it, in double. Points and lines are
 // dropped, polygons triangulated by Assimp.
+//
+// Assimp is not written for hostile input: a 5 KB Collada file can make it allocate 17 GB,
+// and malformed files have crashed it. So it runs in a child process (assimp_isolated)
+// with limits on memory and processor time, and hands the mesh back through a pipe; a
+// crash, a limit reached or a refusal becomes one InvalidInputError naming the file.
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
 #include <limits>
+#include <new>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +37,7 @@ namespace visproxy::parsing {
 namespace {
 
 constexpr unsigned kImportSteps = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
+constexpr rlim_t kAssimpSeconds = 300;  // processor time for one file
 
 // Assimp's messages may span lines; errors are one line.
 std::string one_line(std::string text) {
@@ -90,21 +107,160 @@ bool assimp_reads(const std::filesystem::path& path) {
   return importer.IsExtensionSupported(extension.c_str());
 }
 
+namespace {
+
+// The mesh as bytes through the pipe: vertex and triangle counts, then the coordinates and
+// the indices, in this machine's byte order.
+std::string encode(const TriangleMesh& mesh) {
+  const std::uint64_t counts[2] = {mesh.positions.size(), mesh.triangles.size()};
+  std::string bytes(reinterpret_cast<const char*>(counts), sizeof counts);
+  for (const Vertex& p : mesh.positions) bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(double));
+  for (const Triangle& t : mesh.triangles) bytes.append(reinterpret_cast<const char*>(t.data()), 3 * sizeof(VertexIndex));
+  return bytes;
+}
+
+TriangleMesh decode(const std::string& bytes, const std::filesystem::path& source) {
+  std::uint64_t counts[2];
+  if (bytes.size() < sizeof counts) throw InvalidInputError(source, "Assimp's reader returned a truncated mesh");
+  std::memcpy(counts, bytes.data(), sizeof counts);
+  const std::uint64_t expected = sizeof counts + counts[0] * 3 * sizeof(double) + counts[1] * 3 * sizeof(VertexIndex);
+  if (counts[0] > bytes.size() || counts[1] > bytes.size() || expected != bytes.size())
+    throw InvalidInputError(source, "Assimp's reader returned a truncated mesh");
+  TriangleMesh mesh;
+  mesh.positions.resize(counts[0]);
+  mesh.triangles.resize(counts[1]);
+  const char* at = bytes.data() + sizeof counts;
+  for (Vertex& p : mesh.positions) {
+    std::memcpy(p.data(), at, 3 * sizeof(double));
+    at += 3 * sizeof(double);
+  }
+  for (Triangle& t : mesh.triangles) {
+    std::memcpy(t.data(), at, 3 * sizeof(VertexIndex));
+    at += 3 * sizeof(VertexIndex);
+  }
+  return mesh;
+}
+
+// The process's address space now, in bytes (the child's limit is counted on top of it).
+std::uint64_t address_space_in_use() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  statm >> pages;
+  return pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+}
+
+std::uint64_t memory_allowance(std::uint64_t input_bytes) {
+  if (const char* given = std::getenv("VISPROXY_ASSIMP_MEMORY_MB")) {
+    char* end = nullptr;
+    const unsigned long long mb = std::strtoull(given, &end, 10);
+    if (end != given && *end == '\0' && mb > 0) return mb << 20;
+  }
+  return (std::uint64_t{1} << 30) + 64 * input_bytes;
+}
+
+void write_all(int fd, const std::string& bytes) {
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace
+
+TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
+                             const std::function<TriangleMesh()>& read) {
+  const std::uint64_t allowance = memory_allowance(input_bytes);
+  const std::uint64_t limit = address_space_in_use() + allowance;
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) return read();  // no isolation to be had: read in this process
+  const pid_t child = ::fork();
+  if (child < 0) {
+    ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    return read();
+  }
+  if (child == 0) {
+    ::close(pipe_fds[0]);
+    const rlimit memory{limit, limit};
+    ::setrlimit(RLIMIT_AS, &memory);
+    const rlimit cpu{kAssimpSeconds, kAssimpSeconds + 5};
+    ::setrlimit(RLIMIT_CPU, &cpu);
+    const rlimit no_core{0, 0};
+    ::setrlimit(RLIMIT_CORE, &no_core);
+    std::string reply;
+    try {
+      reply = "M" + encode(read());
+    } catch (const InvalidInputError& error) {
+      reply = "E" + error.problem();
+    } catch (const std::bad_alloc&) {
+      reply = "B";
+    } catch (const std::exception& error) {
+      reply = "E" + std::string("Assimp's reader failed: ") + error.what();
+    }
+    write_all(pipe_fds[1], reply);
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  std::string reply;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    reply.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(pipe_fds[0]);
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string memory_text = std::to_string(allowance >> 20) + " MB";
+  if (WIFSIGNALED(status)) {
+    const int signal = WTERMSIG(status);
+    if (signal == SIGXCPU || signal == SIGKILL)
+      throw InvalidInputError(source, "Assimp took more than " + std::to_string(kAssimpSeconds) + " s of processor time reading it");
+    throw InvalidInputError(source, "Assimp crashed reading it (" + std::string(::strsignal(signal)) + ")");
+  }
+  const bool out_of_memory = reply == "B" || (reply.starts_with("E") && reply.find("bad_alloc") != std::string::npos);
+  if (out_of_memory)
+    throw InvalidInputError(source, "Assimp needs more than " + memory_text +
+                                        " of memory to read it (set VISPROXY_ASSIMP_MEMORY_MB to allow more)");
+  if (reply.starts_with("E")) throw InvalidInputError(source, reply.substr(1));
+  if (!reply.starts_with("M")) throw InvalidInputError(source, "Assimp's reader ended without an answer");
+  return decode(reply.substr(1), source);
+}
+
 TriangleMesh read_assimp_file(const std::filesystem::path& path) {
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path.string(), kImportSteps);
-  if (scene == nullptr) throw InvalidInputError(path, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
-  if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) throw InvalidInputError(path, "Assimp read it only in part (a scene without meshes, or a mesh it could not complete)");
-  return flatten(scene, path);
+  // A .gltf's buffers and images lie beside it: count the folder's files as its input.
+  std::uint64_t input_bytes = 0;
+  std::error_code error;
+  if (extension_of(path) == ".gltf") {
+    for (const auto& item : std::filesystem::directory_iterator(path.parent_path().empty() ? "." : path.parent_path(), error))
+      if (item.is_regular_file(error)) input_bytes += item.file_size(error);
+  } else {
+    input_bytes = std::filesystem::file_size(path, error);
+  }
+  return assimp_isolated(path, input_bytes, [&] {
+    Assimp::Importer importer;
+    const aiScene* scene = importer.ReadFile(path.string(), kImportSteps);
+    if (scene == nullptr) throw InvalidInputError(path, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
+    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0)
+      throw InvalidInputError(path, "Assimp read it only in part (a scene without meshes, or a mesh it could not complete)");
+    return flatten(scene, path);
+  });
 }
 
 TriangleMesh parse_assimp(std::string_view bytes, const std::filesystem::path& source) {
-  Assimp::Importer importer;
-  const std::string hint = extension_of(source).empty() ? std::string() : extension_of(source).substr(1);
-  const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportSteps, hint.c_str());
-  if (scene == nullptr) throw InvalidInputError(source, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
-  if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0) throw InvalidInputError(source, "Assimp read it only in part (a scene without meshes, or a mesh it could not complete)");
-  return flatten(scene, source);
+  return assimp_isolated(source, bytes.size(), [&] {
+    Assimp::Importer importer;
+    const std::string hint = extension_of(source).empty() ? std::string() : extension_of(source).substr(1);
+    const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportSteps, hint.c_str());
+    if (scene == nullptr) throw InvalidInputError(source, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
+    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0)
+      throw InvalidInputError(source, "Assimp read it only in part (a scene without meshes, or a mesh it could not complete)");
+    return flatten(scene, source);
+  });
 }
 
 }  // namespace visproxy::parsing

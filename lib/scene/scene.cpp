@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <numbers>
 
 #include "visproxy/core/errors.h"
@@ -12,6 +13,7 @@
 #include "visproxy/core/json_input.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/subdivide.h"
+#include "visproxy/scene/import_scene.h"
 
 namespace visproxy {
 
@@ -193,13 +195,56 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
     p.fail(where, "no mesh named " + json_quoted(wanted));
   };
 
-  const json& meshes = p.member(document, "meshes", "");
-  if (!meshes.is_object() || meshes.empty()) p.fail("meshes", "expected an object of named meshes");
-  for (const auto& [name, value] : meshes.items())
-    scene.meshes.push_back(p.mesh(name, value, json_member_path("meshes", name)));
+  // "import": a glTF (or other Assimp) file's meshes, instances, lights and camera, with
+  // the proxies every imported instance names; the scene's own parts are added to them.
+  std::optional<Camera> imported_camera;
+  if (const json* import = p.optional_member(document, "import", "")) {
+    p.object(*import, "import");
+    const std::filesystem::path file = p.mesh_path(p.string(p.member(*import, "file", "import"), "import.file"));
+    ImportedScene imported = import_scene(file);
+    // "proxies": specs for every imported instance, or an object of them per imported mesh.
+    std::map<std::string, std::vector<std::string>> proxies;
+    auto specs = [&](const json& list, const std::string& where) {
+      if (!list.is_array()) p.fail(where, "expected an array of proxy specs");
+      std::vector<std::string> texts;
+      for (std::size_t k = 0; k < list.size(); ++k) texts.push_back(p.string(list[k], json_index_path(where, k)));
+      return texts;
+    };
+    if (const json* given = p.optional_member(*import, "proxies", "import")) {
+      if (given->is_object()) {
+        for (const auto& [name, list] : given->items()) {
+          if (std::none_of(imported.meshes.begin(), imported.meshes.end(), [&](const SceneMesh& m) { return m.name == name; }))
+            p.fail(json_member_path("import.proxies", name), "the imported file has no mesh of this name");
+          proxies[name] = specs(list, json_member_path("import.proxies", name));
+        }
+      } else {
+        const std::vector<std::string> every = specs(*given, "import.proxies");
+        for (const SceneMesh& m : imported.meshes) proxies[m.name] = every;
+      }
+    }
+    for (SceneMesh& mesh : imported.meshes) mesh.file = file;
+    scene.meshes = std::move(imported.meshes);
+    for (SceneInstance& instance : imported.instances) {
+      instance.proxies = proxies[instance.mesh];
+      scene.instances.push_back(std::move(instance));
+    }
+    scene.lights = std::move(imported.lights);
+    imported_camera = imported.camera;
+  }
+  const bool imports = document.contains("import");
 
-  const json& instances = p.member(document, "instances", "");
-  if (!instances.is_array() || instances.empty()) p.fail("instances", "expected a non-empty array");
+  if (const json* meshes = imports ? p.optional_member(document, "meshes", "") : &p.member(document, "meshes", "")) {
+    if (!meshes->is_object() || (meshes->empty() && !imports)) p.fail("meshes", "expected an object of named meshes");
+    for (const auto& [name, value] : meshes->items()) {
+      for (const SceneMesh& m : scene.meshes)
+        if (m.name == name) p.fail(json_member_path("meshes", name), "the imported file has a mesh of this name");
+      scene.meshes.push_back(p.mesh(name, value, json_member_path("meshes", name)));
+    }
+  }
+
+  static const json kNone = json::array();
+  const json& instances = imports ? (document.contains("instances") ? document["instances"] : kNone) : p.member(document, "instances", "");
+  if (!instances.is_array() || (instances.empty() && scene.instances.empty())) p.fail("instances", "expected a non-empty array");
   for (std::size_t i = 0; i < instances.size(); ++i) {
     const json& value = instances[i];
     const std::string where = json_index_path("instances", i);
@@ -230,8 +275,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
     scene.instances.push_back(std::move(instance));
   }
 
-  const json& lights = p.member(document, "lights", "");
-  if (!lights.is_array() || lights.empty()) p.fail("lights", "expected a non-empty array");
+  const json& lights = imports ? (document.contains("lights") ? document["lights"] : kNone) : p.member(document, "lights", "");
+  if (!lights.is_array() || (lights.empty() && scene.lights.empty()))
+    p.fail(imports && !document.contains("lights") ? "import" : "lights",
+           imports && !document.contains("lights") ? "the imported file has no emitting material, and the scene no \"lights\""
+                                                   : "expected a non-empty array");
   for (std::size_t i = 0; i < lights.size(); ++i) {
     const json& value = lights[i];
     const std::string where = json_index_path("lights", i);
@@ -265,6 +313,10 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
     scene.lights.push_back(std::move(light));
   }
 
+  if (imported_camera && !document.contains("camera")) {
+    scene.camera = *imported_camera;
+    return scene;
+  }
   const json& camera = p.object(p.member(document, "camera", ""), "camera");
   scene.camera.from = p.vector3(p.member(camera, "from", "camera"), "camera.from");
   scene.camera.at = p.vector3(p.member(camera, "at", "camera"), "camera.at");
@@ -285,6 +337,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
 }
 
 Scene load_scene(const std::filesystem::path& path, const WarningHandler& on_warning) {
+  if (const std::optional<MeshFormat> format = format_from_extension(path); format == MeshFormat::assimp)
+    return load_imported_scene(path);
   return parse_scene(read_file(path), path, on_warning);
 }
 

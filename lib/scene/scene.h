@@ -65,7 +65,9 @@ struct Scene {
 /// folder the build extracted Debian's libcgal-demo meshes into.
 std::filesystem::path cgal_demo_mesh_dir();
 
-/// Reads a scene file. Mesh paths are relative to the scene file's folder, or
+/// Reads a scene file: a visproxy JSON scene, or a file Assimp reads (a glTF 2.0 .gltf or
+/// .glb: load_imported_scene in import_scene.h). A JSON scene may "import" such a file,
+/// whose instances, lights and camera join its own. Mesh paths are relative to the scene file's folder, or
 /// `cgal-demo:NAME` for a libcgal-demo mesh. Throws IOError for unreadable files and
 /// InvalidInputError otherwise, naming the mesh file for a mesh file's problems and else
 /// the scene file and the JSON path of the value at fault:

@@ -85,6 +85,28 @@ TEST_F(CliRender, CornellBoxBoundsMatchesExactAndEveryModeIsFinite) {
   EXPECT_EQ(again.err.find("building"), std::string::npos) << again.err;
 }
 
+// data/scenes/boxes.gltf renders as it is, and a JSON scene that imports it and names
+// proxies for its instances renders every mode, bounds bit for bit equal to exact.
+TEST_F(CliRender, GltfSceneRendersAndItsImportedInstancesUseProxies) {
+  const std::filesystem::path gltf = std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/scenes/boxes.gltf";
+  const auto direct = render(gltf, "gltf", "--spp 2 --width 40 --height 30");
+  ASSERT_EQ(direct.exit_code, 0) << direct.err;
+  double sum = 0;
+  for (const Color& c : image("gltf").pixels) sum += c.sum();
+  EXPECT_GT(sum, 0);
+  const json scene = {{"format", "visproxy-scene"}, {"format_version", 1},
+                      {"import", {{"file", gltf.string()}, {"proxies", {{"boxes.gltf:box", {"hull", "inside:8"}}}}}}};
+  testing::expect_described(scene, "scene.schema.json");
+  std::ofstream(folder_ / "imports.json") << scene.dump();
+  expect_bounds_identical_and_finite(*this, folder_ / "imports.json", "--width 40 --height 30");
+  const json stats = json::parse(read_file(folder_ / "bounds.stats.json"));
+  EXPECT_EQ(stats.at("instances")[0].at("outside_proxy"), nullptr);  // the floor names none
+  for (const int box : {1, 2}) {
+    EXPECT_EQ(stats.at("instances")[box].at("outside_proxy"), "hull");
+    EXPECT_EQ(stats.at("instances")[box].at("inside_proxy"), "inside:8");
+  }
+}
+
 TEST_F(CliRender, GeneratedHairballBoundsMatchesExact) {
   const auto generated = testing::run_visproxy("generate hairball --triangles 20000 -o '" + (folder_ / "hairball").string() + "'");
   ASSERT_EQ(generated.exit_code, 0) << generated.err;

@@ -59,3 +59,59 @@ TEST(AssimpTestModels, EveryModelLoadsOrIsRefusedWithOneLineNamingIt) {
 
 }  // namespace
 }  // namespace visproxy
+
+#include <csignal>
+#include <vector>
+
+#include "visproxy/core/files.h"
+#include "visproxy/mesh/mesh_parsing.h"
+
+namespace visproxy {
+namespace {
+
+// Assimp runs in a child process: what it gives back, and what becomes of a crash, a
+// memory bomb and a refusal there.
+TEST(AssimpIsolated, GivesTheMeshBackAndTurnsCrashesAndMemoryBombsIntoOneLine) {
+  TriangleMesh mesh;
+  mesh.positions = {Vertex(0, 0, 0), Vertex(1, 0, 0), Vertex(0, 1e-300, 1e300)};
+  mesh.triangles = {{0, 1, 2}, {2, 1, 0}};
+  EXPECT_EQ(parsing::assimp_isolated("m.glb", 10, [&] { return mesh; }), mesh);  // bit for bit
+
+  auto error_of = [](const std::function<TriangleMesh()>& read) {
+    try {
+      parsing::assimp_isolated("bad.glb", 1000, read);
+      return std::string("read");
+    } catch (const InvalidInputError& error) {
+      return std::string(error.what());
+    }
+  };
+  EXPECT_EQ(error_of([]() -> TriangleMesh { std::raise(SIGSEGV); return {}; }),
+            "bad.glb: Assimp crashed reading it (Segmentation fault)");
+  EXPECT_EQ(error_of([]() -> TriangleMesh { throw InvalidInputError("bad.glb", "Assimp cannot read it: no"); }),
+            "bad.glb: Assimp cannot read it: no");
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer aborts at the memory limit instead of throwing std::bad_alloc";
+#endif
+  const std::string bomb = error_of([]() -> TriangleMesh {
+    std::vector<std::vector<char>> hoard;
+    for (;;) hoard.emplace_back(std::size_t{64} << 20, 'x');  // until the limit stops it
+  });
+  EXPECT_EQ(bomb.rfind("bad.glb: Assimp needs more than 1024 MB of memory to read it", 0), 0u) << bomb;
+}
+
+// Found by fuzz_read_mesh: 5 KB of Collada that makes Assimp 5.2 allocate 17 GB.
+TEST(AssimpIsolated, TheColladaMemoryBombIsRefusedWithinTheLimit) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer aborts at the memory limit instead of throwing std::bad_alloc";
+#endif
+  const std::string bytes = read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "tests/fuzz/corpus/collada-memory-bomb");
+  try {
+    parse_mesh(std::string_view(bytes).substr(1), MeshFormat::assimp, "bomb.dae");  // the first byte picks the format
+    ADD_FAILURE() << "read";
+  } catch (const InvalidInputError& error) {
+    EXPECT_NE(std::string(error.what()).find("bomb.dae: Assimp needs more than"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace visproxy
