@@ -109,7 +109,8 @@ TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& sour
 bool assimp_reads(const std::filesystem::path& path);
 /// Runs `read` (which calls Assimp) in a child process limited to 1 GiB plus 64 x
 /// `input_bytes` of memory more than this process holds (VISPROXY_ASSIMP_MEMORY_MB
-/// overrides it) and 300 s of processor time, and returns the mesh it made. Its refusal,
+/// overrides it) and 20 s plus 1 s per MB of input of processor time (VISPROXY_ASSIMP_SECONDS
+/// overrides it), and returns the mesh it made. Its refusal,
 /// a crash or a limit reached throws InvalidInputError naming `source`. Where no process
 /// can be started, `read` runs here.
 TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,

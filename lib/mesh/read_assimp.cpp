@@ -37,7 +37,6 @@ namespace visproxy::parsing {
 namespace {
 
 constexpr unsigned kImportSteps = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
-constexpr rlim_t kAssimpSeconds = 300;  // processor time for one file
 
 // Assimp's messages may span lines; errors are one line.
 std::string one_line(std::string text) {
@@ -158,6 +157,17 @@ std::uint64_t memory_allowance(std::uint64_t input_bytes) {
   return (std::uint64_t{1} << 30) + 64 * input_bytes;
 }
 
+// Processor time for one file: 20 s and 1 s per MB of input, at most an hour
+// (VISPROXY_ASSIMP_SECONDS overrides it). Assimp reads about 50 MB/s.
+rlim_t time_allowance(std::uint64_t input_bytes) {
+  if (const char* given = std::getenv("VISPROXY_ASSIMP_SECONDS")) {
+    char* end = nullptr;
+    const unsigned long long seconds = std::strtoull(given, &end, 10);
+    if (end != given && *end == '\0' && seconds > 0) return static_cast<rlim_t>(seconds);
+  }
+  return static_cast<rlim_t>(std::min<std::uint64_t>(20 + (input_bytes >> 20), 3600));
+}
+
 void write_all(int fd, const std::string& bytes) {
   for (std::size_t done = 0; done < bytes.size();) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
@@ -172,6 +182,7 @@ void write_all(int fd, const std::string& bytes) {
 TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
                              const std::function<TriangleMesh()>& read) {
   const std::uint64_t allowance = memory_allowance(input_bytes);
+  const rlim_t seconds = time_allowance(input_bytes);
   const std::uint64_t limit = address_space_in_use() + allowance;
   int pipe_fds[2];
   if (::pipe(pipe_fds) != 0) return read();  // no isolation to be had: read in this process
@@ -183,9 +194,12 @@ TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t 
   }
   if (child == 0) {
     ::close(pipe_fds[0]);
+    // A crash ends the child, whatever handlers this process installed (a fuzzer's, an
+    // interpreter's): the parent reports it.
+    for (const int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGXCPU}) ::signal(signal, SIG_DFL);
     const rlimit memory{limit, limit};
     ::setrlimit(RLIMIT_AS, &memory);
-    const rlimit cpu{kAssimpSeconds, kAssimpSeconds + 5};
+    const rlimit cpu{seconds, seconds + 5};
     ::setrlimit(RLIMIT_CPU, &cpu);
     const rlimit no_core{0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);
@@ -219,7 +233,8 @@ TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t 
   if (WIFSIGNALED(status)) {
     const int signal = WTERMSIG(status);
     if (signal == SIGXCPU || signal == SIGKILL)
-      throw InvalidInputError(source, "Assimp took more than " + std::to_string(kAssimpSeconds) + " s of processor time reading it");
+      throw InvalidInputError(source, "Assimp took more than " + std::to_string(seconds) +
+                                          " s of processor time reading it (set VISPROXY_ASSIMP_SECONDS to allow more)");
     throw InvalidInputError(source, "Assimp crashed reading it (" + std::string(::strsignal(signal)) + ")");
   }
   const bool out_of_memory = reply == "B" || (reply.starts_with("E") && reply.find("bad_alloc") != std::string::npos);

@@ -8,7 +8,11 @@
 //
 //   cmake --preset fuzz && cmake --build --preset fuzz --target fuzz_read_mesh
 //   build/fuzz/tests/fuzz/fuzz_read_mesh -max_len=4096 CORPUS_DIR tests/fuzz/corpus
-// (add -detect_leaks=0 for the Assimp formats: Assimp 5.2 leaks on some malformed files)
+// For the Assimp formats add -detect_leaks=0: Assimp 5.2 leaks on some malformed files.
+// Assimp runs in a child process with a memory limit (read_assimp.cpp); under
+// AddressSanitizer that limit ends the child with "allocator is out of memory" and an
+// artifact instead of std::bad_alloc. Such an artifact is an Assimp memory bomb: check it
+// with the release build's `visproxy info`, which must refuse it with one line.
 
 #include <cmath>
 #include <cstddef>

@@ -60,6 +60,8 @@ TEST(AssimpTestModels, EveryModelLoadsOrIsRefusedWithOneLineNamingIt) {
 }  // namespace
 }  // namespace visproxy
 
+#include <stdlib.h>
+
 #include <csignal>
 #include <vector>
 
@@ -89,6 +91,13 @@ TEST(AssimpIsolated, GivesTheMeshBackAndTurnsCrashesAndMemoryBombsIntoOneLine) {
             "bad.glb: Assimp crashed reading it (Segmentation fault)");
   EXPECT_EQ(error_of([]() -> TriangleMesh { throw InvalidInputError("bad.glb", "Assimp cannot read it: no"); }),
             "bad.glb: Assimp cannot read it: no");
+  ::setenv("VISPROXY_ASSIMP_SECONDS", "1", 1);
+  const std::string hang = error_of([]() -> TriangleMesh {
+    volatile unsigned long spin = 0;
+    for (;;) spin = spin + 1;
+  });
+  ::unsetenv("VISPROXY_ASSIMP_SECONDS");
+  EXPECT_EQ(hang, "bad.glb: Assimp took more than 1 s of processor time reading it (set VISPROXY_ASSIMP_SECONDS to allow more)");
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "AddressSanitizer aborts at the memory limit instead of throwing std::bad_alloc";
 #endif
@@ -110,6 +119,25 @@ TEST(AssimpIsolated, TheColladaMemoryBombIsRefusedWithinTheLimit) {
     ADD_FAILURE() << "read";
   } catch (const InvalidInputError& error) {
     EXPECT_NE(std::string(error.what()).find("bomb.dae: Assimp needs more than"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace visproxy
+
+
+namespace visproxy {
+namespace {
+
+// Found by fuzz_read_mesh: a glTF file on which Assimp 5.2 dies of a segmentation fault.
+// In the child process the crash is one line, and this process goes on.
+TEST(AssimpIsolated, AGltfFileThatCrashesAssimpIsRefused) {
+  const std::string bytes = read_file(std::filesystem::path(VISPROXY_SOURCE_DIR) / "tests/fuzz/corpus/gltf-assimp-segfault");
+  try {
+    parse_mesh(std::string_view(bytes).substr(1), MeshFormat::assimp, "crash.gltf");
+    ADD_FAILURE() << "read";
+  } catch (const InvalidInputError& error) {
+    EXPECT_EQ(std::string(error.what()), "crash.gltf: Assimp crashed reading it (Segmentation fault)");
   }
 }
 
