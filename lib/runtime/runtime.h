@@ -164,6 +164,7 @@ class LearnedCorrections {
 /// exact visibility V (1: unoccluded) for any u uniform in [0, 1): the proxy's zero
 /// probabilities are used only where its claim covers the segment (claim_covers); else
 /// the general form is used, which is unbiased for any proxy.
+/// It keeps a reference to the PlacedProxy, which must outlive it.
 class ShadowEstimator {
  public:
   /// `claimed`: eq. 8's probabilities for segments the claim covers (the kind's equal ones

@@ -336,3 +336,14 @@ def test_bad_proxy_dicts_and_options_raise(knot):
         vp.render(SOURCE / "data/scenes/cornell.json", probabilities="learned")
     with pytest.raises(vp.InvalidInputError, match="unsupported image format"):
         vp.render(SOURCE / "data/scenes/cornell.json", output="image.jpg")
+
+
+def test_gltf_is_read_through_assimp_and_a_file_that_crashes_assimp_only_raises(tmp_path):
+    vertices, triangles = vp.read_mesh(SOURCE / "data/scenes/boxes.gltf")
+    assert len(triangles) == 2 + 2 * 12 + 2  # the floor, the box placed twice, the lamp
+    assert vp.inspect(vertices, triangles)["components"] == 4
+    crash = tmp_path / "crash.gltf"
+    crash.write_bytes((SOURCE / "tests/fuzz/corpus/gltf-assimp-segfault").read_bytes()[1:])
+    with pytest.raises(vp.InvalidInputError, match="Assimp crashed reading it"):
+        vp.read_mesh(crash)
+    assert vp.read_mesh(KNOT)[1].shape == (6400, 3)  # and this interpreter goes on
