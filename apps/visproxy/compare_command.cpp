@@ -133,7 +133,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       "comparison (Billen et al. Tables 5/6, Figure 8): DIR/table.md and table.csv (time, samples and shadow rays per "
       "pixel, exact and proxy tests, traversal steps and primitive tests per pixel, MSE, efficiency 1/(MSE x time) and "
       "its ratio to exact), DIR/convergence.csv and .svg (MSE against time), and every image with its error map.");
-  command->add_option("scene", o->scene, "Scene file")->required();
+  command->add_option("scene", o->scene, "Scene file: JSON, or a glTF 2.0 .gltf/.glb (as for render)")->required();
   command->add_option("-o,--output", o->folder, "Output folder [default: compare-SCENENAME]");
   command->add_option("--proxy", o->proxies,
                       "Stochastic proxy spec to compare (repeatable) [default: every spec the scene's instances name]");
