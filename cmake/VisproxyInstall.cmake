@@ -6,7 +6,7 @@
 #   P/lib/cmake/visproxy          visproxyConfig.cmake, its version file and the targets
 #   P/lib/pkgconfig/visproxy.pc   for pkg-config
 #   P/lib/python3/dist-packages   the Python module (import visproxy), where Debian's python3 looks
-# Headers name nothing from CGAL, Embree, TBB, OpenMesh or TetGen: those stay inside the
+# Headers name nothing from CGAL, Embree, TBB, OpenMesh, TetGen or Assimp: those stay inside the
 # shared library (tests/package checks the installed tree).
 
 include(GNUInstallDirs)
@@ -24,7 +24,8 @@ set_target_properties(visproxy_python PROPERTIES INSTALL_RPATH "$ORIGIN/../../..
 install(TARGETS visproxy_python LIBRARY DESTINATION "lib/python3/dist-packages")
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/visproxy"
         FILES_MATCHING PATTERN "*.h"
-        PATTERN "embree_support.h" EXCLUDE)
+        PATTERN "embree_support.h" EXCLUDE
+        PATTERN "assimp_support.h" EXCLUDE)
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/data/schemas/" DESTINATION "${VISPROXY_INSTALL_SCHEMADIR}")
 install(EXPORT visproxyTargets NAMESPACE visproxy:: DESTINATION "${VISPROXY_INSTALL_CMAKEDIR}")
 

@@ -119,20 +119,15 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   }
   auto place_mesh = [&](const TriangleMesh& object) {
     TriangleMesh placed;
-    for (const Eigen::Affine3d& t : placements) {
-      TriangleMesh copy = object;
-      for (Vertex& p : copy.positions) p = t * p;
-      append_mesh(placed, copy);
-    }
+    for (const Eigen::Affine3d& t : placements) append_mesh(placed, transformed_mesh(object, t));
     return placed;
   };
   auto place_spheres = [&](const std::vector<Sphere>& object) {
     std::vector<Sphere> placed;
     for (const Eigen::Affine3d& t : placements) {
-      const double scale = std::cbrt(std::abs(t.linear().determinant()));
-      if (!((t.linear() / scale).transpose() * (t.linear() / scale)).isIdentity(1e-9))
-        throw InvalidInputError(options.scene, "sphere proxies need instances placed without shear or uneven scale");
-      for (const Sphere& s : object) placed.push_back({t * s.center, scale * s.radius});
+      const std::optional<std::vector<Sphere>> balls = transformed_spheres(object, t);
+      if (!balls) throw InvalidInputError(options.scene, "sphere proxies need instances placed without shear or uneven scale");
+      placed.insert(placed.end(), balls->begin(), balls->end());
     }
     return placed;
   };

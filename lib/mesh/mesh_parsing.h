@@ -105,6 +105,9 @@ TriangleMesh parse_ply(std::string_view bytes, const std::filesystem::path& sour
 TriangleMesh parse_off(std::string_view bytes, const std::filesystem::path& source);
 TriangleMesh parse_stl(std::string_view bytes, const std::filesystem::path& source);
 
+/// The extension of `path` in lower case, with its dot (".gltf"); empty when it has none.
+std::string lowercase_extension(const std::filesystem::path& path);
+
 /// Whether Assimp reads files with this extension (read_assimp.cpp).
 bool assimp_reads(const std::filesystem::path& path);
 /// Runs `read` (which calls Assimp) in a child process limited to 1 GiB plus 64 x

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/mesh/assimp_support.h"
 #include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy::parsing {
@@ -38,7 +39,35 @@ namespace {
 
 constexpr unsigned kImportSteps = aiProcess_Triangulate | aiProcess_ValidateDataStructure;
 
-// Assimp's messages may span lines; errors are one line.
+TriangleMesh flatten(const aiScene* scene, const std::filesystem::path& source) {
+  if (scene->mRootNode == nullptr) throw InvalidInputError(source, "Assimp read no node hierarchy");
+  // Each mesh once, placed as often as nodes use it.
+  std::vector<TriangleMesh> parts;
+  parts.reserve(scene->mNumMeshes);
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) parts.push_back(triangles_of(*scene->mMeshes[i], source));
+  TriangleMesh mesh;
+  std::vector<std::pair<const aiNode*, Eigen::Affine3d>> stack{{scene->mRootNode, to_affine(scene->mRootNode->mTransformation)}};
+  std::size_t nodes = 0;
+  while (!stack.empty()) {
+    const auto [node, transform] = stack.back();
+    stack.pop_back();
+    if (++nodes > 10'000'000) throw InvalidInputError(source, "more than 10 million nodes");
+    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
+      if (node->mMeshes[i] >= scene->mNumMeshes) throw InvalidInputError(source, "a node names a mesh that does not exist");
+      const TriangleMesh& part = parts[node->mMeshes[i]];
+      if (mesh.positions.size() + part.positions.size() > std::numeric_limits<VertexIndex>::max())
+        throw InvalidInputError(source, "more than 2^32 - 1 vertices once the nodes are placed");
+      append_mesh(mesh, transformed_mesh(part, transform));
+    }
+    for (unsigned c = 0; c < node->mNumChildren; ++c)
+      if (node->mChildren[c] != nullptr) stack.emplace_back(node->mChildren[c], transform * to_affine(node->mChildren[c]->mTransformation));
+  }
+  if (mesh.triangles.empty()) throw InvalidInputError(source, "holds no triangles (Assimp found no faces with three corners)");
+  return mesh;
+}
+
+}  // namespace
+
 std::string one_line(std::string text) {
   for (char& c : text)
     if (c == '\n' || c == '\r' || c == '\t') c = ' ';
@@ -52,55 +81,26 @@ Eigen::Affine3d to_affine(const aiMatrix4x4& m) {
   return Eigen::Affine3d(matrix);
 }
 
-TriangleMesh flatten(const aiScene* scene, const std::filesystem::path& source) {
+TriangleMesh triangles_of(const aiMesh& part, const std::filesystem::path& source) {
+  if (part.mNumVertices > 0 && part.mVertices == nullptr) throw InvalidInputError(source, "a mesh without positions");
   TriangleMesh mesh;
-  if (scene->mRootNode == nullptr) throw InvalidInputError(source, "Assimp read no node hierarchy");
-  std::vector<std::pair<const aiNode*, Eigen::Affine3d>> stack{{scene->mRootNode, to_affine(scene->mRootNode->mTransformation)}};
-  std::size_t nodes = 0;
-  while (!stack.empty()) {
-    const auto [node, transform] = stack.back();
-    stack.pop_back();
-    if (++nodes > 10'000'000) throw InvalidInputError(source, "more than 10 million nodes");
-    for (unsigned i = 0; i < node->mNumMeshes; ++i) {
-      if (node->mMeshes[i] >= scene->mNumMeshes) throw InvalidInputError(source, "a node names a mesh that does not exist");
-      const aiMesh* part = scene->mMeshes[node->mMeshes[i]];
-      if (part->mNumVertices > 0 && part->mVertices == nullptr) throw InvalidInputError(source, "a mesh without positions");
-      const std::size_t base = mesh.positions.size();
-      if (base + part->mNumVertices > std::numeric_limits<VertexIndex>::max())
-        throw InvalidInputError(source, "more than 2^32 - 1 vertices once the nodes are placed");
-      for (unsigned v = 0; v < part->mNumVertices; ++v) {
-        const aiVector3D& p = part->mVertices[v];
-        mesh.positions.push_back(transform * Vertex(p.x, p.y, p.z));
-      }
-      for (unsigned f = 0; f < part->mNumFaces; ++f) {
-        const aiFace& face = part->mFaces[f];
-        if (face.mNumIndices != 3) continue;  // points and lines
-        Triangle t;
-        for (int k = 0; k < 3; ++k) {
-          if (face.mIndices[k] >= part->mNumVertices) throw InvalidInputError(source, "a face index is out of range");
-          t[static_cast<std::size_t>(k)] = static_cast<VertexIndex>(base + face.mIndices[k]);
-        }
-        mesh.triangles.push_back(t);
-      }
+  mesh.positions.reserve(part.mNumVertices);
+  for (unsigned v = 0; v < part.mNumVertices; ++v) mesh.positions.emplace_back(part.mVertices[v].x, part.mVertices[v].y, part.mVertices[v].z);
+  for (unsigned f = 0; f < part.mNumFaces; ++f) {
+    const aiFace& face = part.mFaces[f];
+    if (face.mNumIndices != 3) continue;  // points and lines
+    Triangle t;
+    for (unsigned k = 0; k < 3; ++k) {
+      if (face.mIndices[k] >= part.mNumVertices) throw InvalidInputError(source, "a face index is out of range");
+      t[k] = face.mIndices[k];
     }
-    for (unsigned c = 0; c < node->mNumChildren; ++c)
-      if (node->mChildren[c] != nullptr) stack.emplace_back(node->mChildren[c], transform * to_affine(node->mChildren[c]->mTransformation));
+    mesh.triangles.push_back(t);
   }
-  if (mesh.triangles.empty()) throw InvalidInputError(source, "holds no triangles (Assimp found no faces with three corners)");
   return mesh;
 }
 
-std::string extension_of(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
-}  // namespace
-
 bool assimp_reads(const std::filesystem::path& path) {
-  const std::string extension = extension_of(path);
+  const std::string extension = lowercase_extension(path);
   if (extension.size() < 2) return false;
   static const Assimp::Importer importer;
   return importer.IsExtensionSupported(extension.c_str());
@@ -250,7 +250,7 @@ TriangleMesh read_assimp_file(const std::filesystem::path& path) {
   // A .gltf's buffers and images lie beside it: count the folder's files as its input.
   std::uint64_t input_bytes = 0;
   std::error_code error;
-  if (extension_of(path) == ".gltf") {
+  if (lowercase_extension(path) == ".gltf") {
     for (const auto& item : std::filesystem::directory_iterator(path.parent_path().empty() ? "." : path.parent_path(), error))
       if (item.is_regular_file(error)) input_bytes += item.file_size(error);
   } else {
@@ -269,7 +269,7 @@ TriangleMesh read_assimp_file(const std::filesystem::path& path) {
 TriangleMesh parse_assimp(std::string_view bytes, const std::filesystem::path& source) {
   return assimp_isolated(source, bytes.size(), [&] {
     Assimp::Importer importer;
-    const std::string hint = extension_of(source).empty() ? std::string() : extension_of(source).substr(1);
+    const std::string hint = lowercase_extension(source).empty() ? std::string() : lowercase_extension(source).substr(1);
     const aiScene* scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportSteps, hint.c_str());
     if (scene == nullptr) throw InvalidInputError(source, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
     if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0)

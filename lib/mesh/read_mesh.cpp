@@ -24,10 +24,19 @@ std::string_view format_name(MeshFormat format) {
   return "unknown";
 }
 
-std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
+namespace parsing {
+
+std::string lowercase_extension(const std::filesystem::path& path) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension;
+}
+
+}  // namespace parsing
+
+std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path) {
+  const std::string extension = parsing::lowercase_extension(path);
   if (extension == ".obj") return MeshFormat::obj;
   if (extension == ".ply") return MeshFormat::ply;
   if (extension == ".off") return MeshFormat::off;

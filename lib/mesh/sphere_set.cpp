@@ -199,4 +199,14 @@ std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::si
   return headed;
 }
 
+std::optional<std::vector<Sphere>> transformed_spheres(const std::vector<Sphere>& spheres, const Eigen::Affine3d& transform) {
+  const double scale = std::cbrt(std::abs(transform.linear().determinant()));
+  if (!(scale > 0) || !((transform.linear() / scale).transpose() * (transform.linear() / scale)).isIdentity(1e-9))
+    return std::nullopt;
+  std::vector<Sphere> placed;
+  placed.reserve(spheres.size());
+  for (const Sphere& s : spheres) placed.push_back({transform * s.center, scale * s.radius});
+  return placed;
+}
+
 }  // namespace visproxy

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,6 +35,11 @@ std::vector<Sphere> read_sphere_set(const std::filesystem::path& path);
 
 /// The same from the file's text; `path` names it in errors.
 std::vector<Sphere> parse_sphere_set(std::string_view text, const std::filesystem::path& path);
+
+/// The spheres placed by `transform` (centres mapped, radii scaled), when it is a
+/// similarity: a rotation or reflection, a translation and one scale (within 1e-9). nullopt
+/// for a shear, an uneven or a zero scale, which would make the balls ellipsoids.
+std::optional<std::vector<Sphere>> transformed_spheres(const std::vector<Sphere>& spheres, const Eigen::Affine3d& transform);
 
 /// Every sphere as a closed triangle mesh (an icosahedron subdivided `levels` times and
 /// pushed onto the sphere), joined into one mesh: for looking at sphere proxies in a mesh

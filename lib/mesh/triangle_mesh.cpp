@@ -75,4 +75,10 @@ void append_mesh(TriangleMesh& mesh, const TriangleMesh& part) {
   for (const Triangle& t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
 }
 
+TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
+  TriangleMesh result = mesh;
+  for (Vertex& p : result.positions) p = transform * p;
+  return result;
+}
+
 }  // namespace visproxy

@@ -74,4 +74,7 @@ std::vector<Vertex> used_positions(const TriangleMesh& mesh);
 /// Adds `part`'s vertices and triangles to `mesh` (indices shifted; nothing is welded).
 void append_mesh(TriangleMesh& mesh, const TriangleMesh& part);
 
+/// `mesh` with every vertex mapped by `transform` (triangles as they are).
+TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform);
+
 }  // namespace visproxy

@@ -10,6 +10,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/trace/convex_polytope.h"
 #include "visproxy/trace/embree_support.h"
+#include "visproxy/trace/ray_scene.h"
 #include "visproxy/verify/containment.h"
 
 namespace visproxy {
@@ -23,16 +24,11 @@ constexpr unsigned kLightMask = 1u << 31;
 constexpr unsigned kAllInstances = kLightMask - 1;
 unsigned instance_mask(std::size_t instance) { return 1u << (instance % 31); }
 
-// Embree holds vertices and rays in single precision (24-bit significands). The proofs
-// are made in double; these bounds, relative to the magnitude of the coordinates Embree
-// sees, cover the rounding of vertices and rays and the error of Embree's tests. Embree's
-// triangle test works on the vertices relative to the ray's origin, each rounded to float
-// and sheared: a vertex moves by about 3 ulps of |vertex| + |origin| (half an ulp for each
-// rounding). 2^-21 of a magnitude is 8 float ulps at it, both for the padding of each
-// proxy (so two surfaces proved apart stay apart by 16 ulps less 6) and for the offsets of
-// points off their surfaces.
-constexpr double kFloatPadding = 0x1.0p-21;
-constexpr double kSurfaceOffset = 0x1.0p-21;
+// kFloatRoundingBound (ray_scene.h), relative to the magnitude of the coordinates Embree
+// sees, both for the padding of each proxy (so two surfaces proved apart stay apart by 16
+// ulps less 6) and for the offsets of points off their surfaces.
+constexpr double kFloatPadding = kFloatRoundingBound;
+constexpr double kSurfaceOffset = kFloatRoundingBound;
 
 // For each triangle of a small mesh: whether every vertex lies behind its plane (against
 // the normal of its winding), and whether every vertex lies in front of it.
@@ -116,12 +112,6 @@ struct ConvexInstance {
 
 double largest_magnitude(const BoundingBox& box, const Vertex& center) {
   return box.empty() ? 0.0 : std::max((box.max - center).cwiseAbs().maxCoeff(), (box.min - center).cwiseAbs().maxCoeff());
-}
-
-TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
-  TriangleMesh result = mesh;
-  for (Vertex& p : result.positions) p = transform * p;
-  return result;
 }
 
 std::string kind_text(ProxyKind kind) {
@@ -416,24 +406,11 @@ PreparedProxy prepare_proxy(const InstanceProxy& p, const SceneMesh& mesh, doubl
   }
   if (prepared.kind != ProxyKind::inside) prepared.polytope = ConvexPolytope::from_mesh(p.mesh);
   if (prepared.polytope || prepared.kind == ProxyKind::general) return prepared;
-  if (prepared.kind == ProxyKind::outside) {
-    // Convex with many planes (up to 16 384 triangles: the plane test is quadratic):
-    // scaled about its centre, which holds the whole proxy pushed out by `pad` (a convex
-    // body holding a ball of radius r about c holds, scaled by 1 + pad / r about c, every
-    // point within pad of it).
-    if (const std::optional<ConvexPolytope> many =
-            p.mesh.triangles.size() <= 16384 ? ConvexPolytope::from_mesh(p.mesh, p.mesh.triangles.size()) : std::nullopt) {
-      const std::vector<Vertex> points = used_positions(p.mesh);
-      Vertex center = Vertex::Zero();
-      for (const Vertex& v : points) center += v / static_cast<double>(points.size());
-      const double inner = many->inner_distance(center);
-      if (inner > 0) {
-        const double scale = 1 + 2 * pad / inner;
-        for (Vertex& v : prepared.mesh.positions) v = center + scale * (v - center);
-        return prepared;
-      }
-    }
-  }
+  // Convex with many planes (up to 16 384 triangles: the plane test is quadratic): grown
+  // to hold the whole proxy pushed out by twice `pad`.
+  if (prepared.kind == ProxyKind::outside && p.mesh.triangles.size() <= 16384 &&
+      grow_convex_mesh(prepared.mesh, 2 * pad, p.mesh.triangles.size()))
+    return prepared;
   // Otherwise the proxy must keep the rounding bound away from the mesh.
   if (!surfaces_clear_by(p.mesh, mesh.mesh, 2 * pad)) {
     prepared.note = name + ": it comes within float rounding (" + std::to_string(2 * pad) +

@@ -10,6 +10,7 @@
 #include "visproxy/evaluate/proxy_folder.h"
 #include "visproxy/evaluate/verify_proxy.h"
 #include "visproxy/trace/convex_polytope.h"
+#include "visproxy/trace/ray_scene.h"
 #include "visproxy/verify/containment.h"
 
 namespace visproxy {
@@ -17,18 +18,8 @@ namespace {
 
 using nlohmann::json;
 
-// 8 float ulps of a magnitude (render_world.cpp derives the same bound): a vertex Embree
-// tests moves by about 3 ulps of |vertex| + |ray origin| through rounding and shearing.
-constexpr double kFloatPadding = 0x1.0p-21;
-
 std::string claim_text(ProxyKind kind) {
   return kind == ProxyKind::outside ? "outside claim (contains the mesh)" : "inside claim (lies within the mesh)";
-}
-
-TriangleMesh placed(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
-  TriangleMesh world = mesh;
-  for (Vertex& p : world.positions) p = transform * p;
-  return world;
 }
 
 double magnitude(const TriangleMesh& mesh, const Vertex& origin) {
@@ -98,22 +89,17 @@ PlacedProxy RuntimeProxy::place(const Placement& placement) const {
   out.note_ = note_;
   out.origin_ = placement.origin;
   const Eigen::Affine3d& t = placement.transform;
-  const TriangleMesh source_world = placed(source_, t);
-  double scale = 1;
-  if (!spheres_.empty()) {
-    scale = std::cbrt(std::abs(t.linear().determinant()));
-    if (!(scale > 0) || !((t.linear() / scale).transpose() * (t.linear() / scale)).isIdentity(1e-9))
-      throw Error("proxy " + name_ + ": sphere proxies need a placement without shear or uneven scale");
-  }
-  TriangleMesh world = placed(mesh_, t);
+  const TriangleMesh source_world = transformed_mesh(source_, t);
+  const std::optional<std::vector<Sphere>> balls = transformed_spheres(spheres_, t);
+  if (!balls) throw Error("proxy " + name_ + ": sphere proxies need a placement without shear or uneven scale");
+  TriangleMesh world = transformed_mesh(mesh_, t);
   double m = std::max({placement.ray_magnitude, magnitude(world, placement.origin), magnitude(source_world, placement.origin)});
-  for (const Sphere& s : spheres_) m = std::max(m, ((t * s.center) - placement.origin).cwiseAbs().maxCoeff() + scale * s.radius);
-  const double pad = kFloatPadding * m;
+  for (const Sphere& s : *balls) m = std::max(m, (s.center - placement.origin).cwiseAbs().maxCoeff() + s.radius);
+  const double pad = kFloatRoundingBound * m;
   out.pad_ = pad;
 
   if (!spheres_.empty()) {
-    for (const Sphere& s : spheres_) {
-      Sphere w{t * s.center, scale * s.radius};
+    for (Sphere w : *balls) {
       if (kind_ == ProxyKind::inside) {
         if (w.radius <= pad) continue;
         w.radius -= pad;
@@ -126,25 +112,12 @@ PlacedProxy RuntimeProxy::place(const Placement& placement) const {
       out.kind_ = ProxyKind::general;
     }
   } else {
+    // Convex: grown by twice the bound, which leaves room for the grown vertices' own rounding.
     std::optional<ConvexPolytope> convex;
-    if (kind_ == ProxyKind::outside && world.triangles.size() <= 16384)
+    if (kind_ == ProxyKind::outside && world.triangles.size() <= 16384 &&
+        grow_convex_mesh(world, 2 * pad, world.triangles.size()))
       convex = ConvexPolytope::from_mesh(world, world.triangles.size());
-    bool scaled = false;
-    if (convex) {
-      const std::vector<Vertex> points = used_positions(world);
-      Vertex center = Vertex::Zero();
-      for (const Vertex& v : points) center += v / static_cast<double>(points.size());
-      const double inner = convex->inner_distance(center);
-      if (inner > 0) {
-        // A convex body holding a ball of radius r about c holds, scaled by 1 + pad / r
-        // about c, every point within pad of it; twice that leaves room for the scaled
-        // vertices' own rounding.
-        const double factor = 1 + 2 * pad / inner;
-        for (Vertex& v : world.positions) v = center + factor * (v - center);
-        convex = ConvexPolytope::from_mesh(world, world.triangles.size());
-        scaled = convex.has_value();
-      }
-    }
+    const bool scaled = convex.has_value();
     if (kind_ != ProxyKind::general && !scaled && !surfaces_clear_by(world, source_world, 2 * pad)) {
       out.note_ = "proxy " + name_ + ": it comes within float rounding (" + std::to_string(2 * pad) +
                   " world units) of the mesh, so its claim may not survive single-precision ray tests: used as a general proxy";

@@ -6,7 +6,6 @@
 #include <assimp/scene.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -16,34 +15,17 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/mesh/assimp_support.h"
+#include "visproxy/mesh/mesh_parsing.h"
 #include "visproxy/mesh/read_mesh.h"
 
 namespace visproxy {
 namespace {
 
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
-}
-
-std::string one_line(std::string text) {
-  for (char& c : text)
-    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
-  return text.empty() ? std::string("no reason given") : text;
-}
-
-Eigen::Affine3d to_affine(const aiMatrix4x4& m) {
-  Eigen::Matrix4d matrix;
-  matrix << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3, m.d4;
-  return Eigen::Affine3d(matrix);
-}
-
 // KHR_materials_emissive_strength per glTF material index (Assimp 5.2 does not read it):
 // from the .gltf's JSON, or the JSON chunk of a .glb. 1 where absent or unreadable.
 std::vector<double> emissive_strengths(const std::filesystem::path& path) {
-  const std::string extension = lower_extension(path);
+  const std::string extension = parsing::lowercase_extension(path);
   if (extension != ".gltf" && extension != ".glb") return {};
   std::string text = read_file(path);
   if (extension == ".glb") {
@@ -81,9 +63,10 @@ ImportedScene import_scene(const std::filesystem::path& path) {
   read_mesh(path, {.weld = Weld::never, .on_warning = {}});
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_ValidateDataStructure);
-  if (scene == nullptr) throw InvalidInputError(path, "Assimp cannot read it: " + one_line(importer.GetErrorString()));
+  if (scene == nullptr) throw InvalidInputError(path, "Assimp cannot read it: " + parsing::one_line(importer.GetErrorString()));
   if (scene->mRootNode == nullptr) throw InvalidInputError(path, "Assimp read no node hierarchy");
-  const bool gltf = lower_extension(path) == ".gltf" || lower_extension(path) == ".glb";
+  const std::string extension = parsing::lowercase_extension(path);
+  const bool gltf = extension == ".gltf" || extension == ".glb";
   const std::vector<double> strengths = emissive_strengths(path);
 
   // Each Assimp mesh as a SceneMesh (welded), with its material's colours.
@@ -99,18 +82,7 @@ ImportedScene import_scene(const std::filesystem::path& path) {
   const std::string file_name = path.filename().string();
   for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
     const aiMesh* m = scene->mMeshes[i];
-    TriangleMesh mesh;
-    for (unsigned v = 0; v < m->mNumVertices; ++v) mesh.positions.emplace_back(m->mVertices[v].x, m->mVertices[v].y, m->mVertices[v].z);
-    for (unsigned f = 0; f < m->mNumFaces; ++f) {
-      const aiFace& face = m->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      Triangle t;
-      for (unsigned k = 0; k < 3; ++k) {
-        if (face.mIndices[k] >= m->mNumVertices) throw InvalidInputError(path, "a face index is out of range");
-        t[k] = face.mIndices[k];
-      }
-      mesh.triangles.push_back(t);
-    }
+    const TriangleMesh mesh = parsing::triangles_of(*m, path);
     if (mesh.triangles.empty()) continue;
     require_coordinates_in_range(mesh, path);
     Part& part = parts[i];
@@ -136,7 +108,7 @@ ImportedScene import_scene(const std::filesystem::path& path) {
 
   // The nodes, depth first in the file's order, with their world transforms; cameras by their node's name.
   std::map<std::string, Eigen::Affine3d> node_transforms;
-  std::vector<std::pair<const aiNode*, Eigen::Affine3d>> stack{{scene->mRootNode, to_affine(scene->mRootNode->mTransformation)}};
+  std::vector<std::pair<const aiNode*, Eigen::Affine3d>> stack{{scene->mRootNode, parsing::to_affine(scene->mRootNode->mTransformation)}};
   std::vector<bool> used(result.meshes.size(), false);
   while (!stack.empty()) {
     const auto [node, transform] = stack.back();
@@ -163,7 +135,7 @@ ImportedScene import_scene(const std::filesystem::path& path) {
       }
     }
     for (unsigned c = node->mNumChildren; c-- > 0;)  // reversed, so that children are visited in the file's order
-      if (node->mChildren[c] != nullptr) stack.emplace_back(node->mChildren[c], transform * to_affine(node->mChildren[c]->mTransformation));
+      if (node->mChildren[c] != nullptr) stack.emplace_back(node->mChildren[c], transform * parsing::to_affine(node->mChildren[c]->mTransformation));
   }
   // Meshes only lights use are not scene meshes.
   std::vector<SceneMesh> kept;

@@ -147,4 +147,17 @@ bool ConvexPolytope::meets_segment(const Vertex& from, const Vertex& to) const {
   return true;
 }
 
+bool grow_convex_mesh(TriangleMesh& mesh, double distance, std::size_t max_planes) {
+  const std::optional<ConvexPolytope> solid = ConvexPolytope::from_mesh(mesh, max_planes);
+  if (!solid) return false;
+  const std::vector<Vertex> points = used_positions(mesh);
+  Vertex center = Vertex::Zero();
+  for (const Vertex& v : points) center += v / static_cast<double>(points.size());
+  const double inner = solid->inner_distance(center);
+  if (!(inner > 0)) return false;
+  const double scale = 1 + distance / inner;
+  for (Vertex& v : mesh.positions) v = center + scale * (v - center);
+  return true;
+}
+
 }  // namespace visproxy

@@ -55,4 +55,11 @@ class ConvexPolytope {
   double radius_ = 0;
 };
 
+/// Scales a closed convex `mesh` (at most `max_planes` face planes, as from_mesh) about
+/// the centroid of its vertices so that its solid holds every point within `distance` of
+/// its solid before: a convex body holding a ball of radius r about c holds, scaled by
+/// 1 + distance / r about c, every point within distance of it. Returns false, and leaves
+/// the mesh as it is, when it is not closed convex or its centroid is not inside it.
+bool grow_convex_mesh(TriangleMesh& mesh, double distance, std::size_t max_planes);
+
 }  // namespace visproxy

@@ -14,6 +14,15 @@
 
 namespace visproxy {
 
+/// Embree holds vertices and rays in single precision (24-bit significands); proofs are
+/// made in double. This bound, relative to the magnitude of the coordinates Embree sees,
+/// covers the rounding of vertices and rays and the error of Embree's tests: its triangle
+/// test works on the vertices relative to the ray's origin, each rounded to float and
+/// sheared, so a vertex moves by about 3 ulps of |vertex| + |origin| (half an ulp for each
+/// rounding). 2^-21 of a magnitude is 8 float ulps at it: proxies padded by it (outside
+/// ones grown, inside ones shrunk) keep their proved claims for float rays.
+inline constexpr double kFloatRoundingBound = 0x1.0p-21;
+
 /// The open segment from `from` to `to` (its end points excluded).
 struct Segment {
   Vertex from;
