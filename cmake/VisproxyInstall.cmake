@@ -25,7 +25,8 @@ install(TARGETS visproxy_python LIBRARY DESTINATION "lib/python3/dist-packages")
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/visproxy"
         FILES_MATCHING PATTERN "*.h"
         PATTERN "embree_support.h" EXCLUDE
-        PATTERN "assimp_support.h" EXCLUDE)
+        PATTERN "assimp_support.h" EXCLUDE
+        PATTERN "conservative_decimation.h" EXCLUDE)
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/data/schemas/" DESTINATION "${VISPROXY_INSTALL_SCHEMADIR}")
 install(EXPORT visproxyTargets NAMESPACE visproxy:: DESTINATION "${VISPROXY_INSTALL_CMAKEDIR}")
 
