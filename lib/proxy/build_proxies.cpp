@@ -14,6 +14,7 @@
 #include "visproxy/proxy/alpha_wrap.h"
 #include "visproxy/proxy/bounded_hull.h"
 #include "visproxy/proxy/convex_hull.h"
+#include "visproxy/proxy/inner_hull.h"
 #include "visproxy/proxy/inscribed_spheres.h"
 #include "visproxy/proxy/merge_spheres.h"
 #include "visproxy/proxy/outer_hull.h"
@@ -96,6 +97,21 @@ Piece build_piece(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOp
                       {"max_distance_to_input_world", outer.max_distance_to_input_world}};
       break;
     }
+    case ProxyMethod::inner_hull: {
+      InnerHullResult inner = build_inner_hull(mesh, {.max_triangles = spec.count, .grid_cells = spec.grid_cells});
+      if (inner.mesh.triangles.empty())
+        throw InvalidInputError("", "the solid is thinner everywhere than about one grid cell (" +
+                                        std::to_string(inner.grid_cell_world) +
+                                        " mesh units): no inner hull on this grid; a larger grid=G resolves thinner parts");
+      piece.mesh = std::move(inner.mesh);
+      piece.result = {{"reached_target", inner.reached_target},
+                      {"start_triangles", inner.start_triangles},
+                      {"grid_cell_world", inner.grid_cell_world},
+                      {"components_dropped", inner.components_dropped},
+                      {"volume", inner.volume},
+                      {"max_distance_to_input_world", inner.max_distance_to_input_world}};
+      break;
+    }
     case ProxyMethod::quadric: {
       QuadricSimplifyResult simplified = simplify_quadric(mesh, {.max_triangles = spec.count});
       piece.mesh = std::move(simplified.mesh);
@@ -124,6 +140,8 @@ std::string describe(ProxyMethod method) {
     case ProxyMethod::bounded_hull: return "convex hull simplified by greedy half-space removal";
     case ProxyMethod::alpha_wrap: return "3D alpha wrap (CGAL)";
     case ProxyMethod::outer_hull: return "alpha wrap decimated by conservative edge collapses";
+    case ProxyMethod::inner_hull:
+      return "marching-tetrahedra surface inside the solid, decimated by conservative edge collapses";
     case ProxyMethod::quadric: return "quadric edge collapse";
     case ProxyMethod::clustering: return "vertex clustering";
     case ProxyMethod::inscribed_spheres:
@@ -141,6 +159,7 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
     case ProxyMethod::bounded_hull: return {{"max_faces", spec.count}};
     case ProxyMethod::outer_hull:
     case ProxyMethod::quadric: return {{"max_triangles", spec.count}};
+    case ProxyMethod::inner_hull: return {{"max_triangles", spec.count}, {"grid_cells", spec.grid_cells}};
     case ProxyMethod::alpha_wrap:
       return {{"alpha_relative", spec.alpha_relative},
               {"offset_relative", spec.offset_relative},

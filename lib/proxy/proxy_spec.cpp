@@ -54,7 +54,8 @@ ProxyKind ProxySpec::kind() const {
     case ProxyMethod::quadric:
     case ProxyMethod::clustering:
     case ProxyMethod::sphere_set: return ProxyKind::general;
-    case ProxyMethod::inscribed_spheres: return ProxyKind::inside;
+    case ProxyMethod::inscribed_spheres:
+    case ProxyMethod::inner_hull: return ProxyKind::inside;
     default: return ProxyKind::outside;
   }
 }
@@ -112,6 +113,18 @@ ProxySpec parse_proxy_spec(std::string_view text) {
     spec.method = ProxyMethod::outer_hull;
     spec.count = parse_count(text, argument);
     if (spec.count < 4) fail(text, "a closed mesh has at least 4 triangles");
+  } else if (method == "inner") {
+    require_argument("inner:N[,grid=G]");
+    spec.method = ProxyMethod::inner_hull;
+    const std::size_t comma = argument.find(',');
+    spec.count = parse_count(text, argument.substr(0, comma));
+    if (spec.count < 4) fail(text, "a closed mesh has at least 4 triangles");
+    if (comma != std::string_view::npos) {
+      const std::string_view item = argument.substr(comma + 1);
+      if (!item.starts_with("grid=")) fail(text, "unknown inner parameter '" + std::string(item) + "' (expected grid=G)");
+      spec.grid_cells = parse_count(text, item.substr(5));
+      if (spec.grid_cells < 4 || spec.grid_cells > 1024) fail(text, "grid must be between 4 and 1024 cells");
+    }
   } else if (method == "quadric") {
     require_argument("quadric:N");
     spec.method = ProxyMethod::quadric;
@@ -160,8 +173,8 @@ ProxySpec parse_proxy_spec(std::string_view text) {
       fail(text, "a sphere count is given twice");
   } else {
     fail(text, "unknown proxy '" + std::string(method) +
-                   "' (expected aabb, obb, hull, hull:N, wrap, wrap:alpha=A,offset=O, outer:N, quadric:N, cluster:F, "
-                   "inside:N, spheres:N[,N2,...])");
+                   "' (expected aabb, obb, hull, hull:N, wrap, wrap:alpha=A,offset=O, outer:N, inner:N, quadric:N, "
+                   "cluster:F, inside:N, spheres:N[,N2,...])");
   }
   return spec;
 }

@@ -8,6 +8,8 @@
 //   wrap                 alpha wrap, default alpha and offset        (outside)
 //   wrap:alpha=A,offset=O  alpha wrap; A, O relative to the bbox diagonal (either may be left out)
 //   outer:N              non-convex outside mesh, at most N triangles (outside)
+//   inner:N[,grid=G]     non-convex inside mesh, at most N triangles, started from a grid of
+//                        G cells along the longest side (default 64) (inside)
 //   quadric:N            quadric edge collapse to at most N triangles (general)
 //   cluster:F            vertex clustering, cell F x largest bbox extent (general)
 //   inside:N             N maximal spheres inscribed in a closed mesh (inside)
@@ -36,6 +38,7 @@ enum class ProxyMethod {
   bounded_hull,
   alpha_wrap,
   outer_hull,
+  inner_hull,
   quadric,
   clustering,
   inscribed_spheres,
@@ -50,7 +53,8 @@ inline constexpr double kDefaultWrapOffsetRelative = 1.0 / 600;
 struct ProxySpec {
   ProxyMethod method = ProxyMethod::aabb;
   std::string text;               ///< the spec as given, e.g. "hull:32"
-  std::size_t count = 0;          ///< N of hull:N, outer:N, quadric:N, inside:N
+  std::size_t count = 0;          ///< N of hull:N, outer:N, inner:N, quadric:N, inside:N
+  std::size_t grid_cells = 64;    ///< G of inner:N,grid=G
   double cell_size_relative = 0;  ///< F of cluster:F
   double alpha_relative = kDefaultWrapAlphaRelative;    ///< wrap
   double offset_relative = kDefaultWrapOffsetRelative;  ///< wrap

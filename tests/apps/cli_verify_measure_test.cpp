@@ -184,6 +184,55 @@ TEST_F(CliVerifyEdited, InsideSpheresOfSelfIntersectingMeshesVerify) {
   }
 }
 
+// inner:N on the knot is an inside proxy made of triangles: verify proves it, no measured
+// line contradicts it, and a vertex pushed out of the mesh by hand makes it fail; an input
+// with boundary edges has no solid to lie in and gets exit 2 naming the file and the defect.
+TEST_F(CliVerifyEdited, InnerHullIsProvedMeasuredAndRefusedWhenEdited) {
+  const std::string mesh = testing::cgal_mesh("knot1.off").string();
+  const std::filesystem::path out = folder_ / "inner";
+  const auto built = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() + "' --proxy inner:256,grid=48");
+  ASSERT_EQ(built.exit_code, 0) << built.err;
+  const json entry = json::parse(read_file(out / "manifest.json")).at("proxies")[0];
+  EXPECT_EQ(entry.at("kind"), "inside");
+  EXPECT_EQ(entry.at("primitive_type"), "triangle");
+  EXPECT_LE(entry.at("primitives").get<std::size_t>(), 256u);
+  EXPECT_TRUE(entry.at("result").at("reached_target").get<bool>());
+
+  const auto verified = testing::run_visproxy("verify '" + mesh + "' '" + out.string() + "'");
+  ASSERT_EQ(verified.exit_code, 0) << verified.out << verified.err;
+  EXPECT_NE(verified.out.find("1 of 1 claims hold"), std::string::npos) << verified.out;
+  const auto measured = testing::run_visproxy("measure '" + mesh + "' '" + out.string() + "' --rays 20000 --timed-rays 1000");
+  ASSERT_EQ(measured.exit_code, 0) << measured.err;
+  const json measurement = json::parse(read_file(out / "manifest.json")).at("proxies")[0].at("measure");
+  EXPECT_EQ(measurement.at("rays_contradicting_claim").get<std::uint64_t>(), 0u);
+  EXPECT_GT(measurement.at("f_hit").at("value").get<double>(), 0.5);
+  testing::expect_matches_schema(json::parse(read_file(out / "manifest.json")));
+
+  // The proxy vertex nearest the mesh, pushed out through the surface.
+  TriangleMesh inner = read_mesh(out / "inner-256-grid=48.ply", {.weld = Weld::never, .on_warning = {}});
+  const TriangleMesh knot = read_mesh(mesh);
+  const BoundingBox box = bounding_box(inner);
+  const Vertex centre = 0.5 * (box.min + box.max);
+  std::size_t farthest = 0;
+  for (std::size_t v = 0; v < inner.positions.size(); ++v)
+    if ((inner.positions[v] - centre).norm() > (inner.positions[farthest] - centre).norm()) farthest = v;
+  inner.positions[farthest] = centre + 1.5 * (inner.positions[farthest] - centre);
+  write_mesh(out / "inner-256-grid=48.ply", inner);
+  const auto edited = testing::run_visproxy("verify '" + mesh + "' '" + out.string() + "'");
+  EXPECT_EQ(edited.exit_code, 1) << edited.out << edited.err;
+  EXPECT_NE(edited.err.find("inner-256-grid=48 (inside) fails: proxy vertex " + std::to_string(farthest)),
+            std::string::npos)
+      << edited.err;
+
+  const std::string open = testing::cgal_mesh("elephant-with-holes.off").string();
+  const auto refused = testing::run_visproxy("build '" + open + "' -o '" + (folder_ / "open").string() + "' --proxy inner:64");
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_EQ(refused.err.find('\n'), refused.err.size() - 1) << refused.err;
+  EXPECT_NE(refused.err.find("elephant-with-holes.off"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("boundary edges"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "open" / "manifest.json"));
+}
+
 TEST_F(CliVerifyMeasure, MeasureRecordsFiguresReproducibly) {
   const auto first = run("measure", " --rays 40000 --seed 5 --timed-rays 2000");
   ASSERT_EQ(first.exit_code, 0) << first.err;

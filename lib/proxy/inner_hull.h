@@ -1,0 +1,70 @@
+#pragma once
+// A non-convex *inside* proxy with a triangle budget: a closed surface of at most N
+// triangles that provably lies inside the solid of a closed input (a shadow mesh that never
+// sticks out of the visible mesh). The mirror of outer_hull.h.
+
+#include <cstddef>
+
+#include "visproxy/mesh/triangle_mesh.h"
+
+namespace visproxy {
+
+struct InnerHullOptions {
+  std::size_t max_triangles = 512;  ///< triangle budget; must be at least 4
+  /// Cells of the starting grid along the longest side of the input's bounding box. The
+  /// start lies about half a cell inside the surface; parts thinner than about two cells
+  /// may be lost. Default 64: on bunny00 a start of about 90 K triangles.
+  std::size_t grid_cells = 64;
+  /// Passes of moving every vertex towards the input after the collapses (each vertex by
+  /// 90 %, 60 % or 30 % of its distance to the input, the first the checks allow).
+  std::size_t relax_passes = 6;
+};
+
+struct InnerHullResult {
+  TriangleMesh mesh;            ///< the proxy, outward-oriented
+  bool reached_target = false;  ///< mesh has at most max_triangles triangles
+  std::size_t start_triangles = 0;  ///< triangles of the grid surface the decimation started from
+  double grid_cell_world = 0;       ///< edge of a grid cell, input units
+  std::size_t components_dropped = 0;  ///< small components left out to meet the budget
+  /// Upper bound of the distance from any point of the proxy surface to the input surface
+  /// (see OuterHullResult::max_distance_to_input_world): how deep the proxy may sit.
+  double max_distance_to_input_world = 0;
+  double volume = 0;  ///< enclosed volume of the proxy, input units cubed
+};
+
+/// Inner hull of at most `max_triangles` triangles inside the solid of `input`
+/// ({winding number != 0}; the input must be closed: every edge used as often in one
+/// direction as in the other, self-intersections and non-manifold edges allowed).
+///
+///  1. Start: the winding number of the input at the vertices of a grid (scanline
+///     crossings) and their distance to the surface; grid points inside with a distance
+///     above half a cell are marked, and marching tetrahedra (six per cell) separate marked
+///     from unmarked points, each vertex within 0.9 of its marked point's distance, so
+///     inside the solid. Triangles that meet the input (exact test) have their
+///     tetrahedron's marked corners unmarked unless they are safe (a distance above a
+///     cell's diagonal: the ball free of the input about such a corner holds the whole
+///     tetrahedron), and the surface is made again until none does. The start is then
+///     checked exactly (conservative_decimation.h: starts_conservative), not assumed.
+///  2. Collapse edges, the one that removes the least volume first, each merged vertex
+///     placed on the inner side of the planes of the triangles it replaces (a 3-variable
+///     LP), then move vertices towards the input `relax_passes` times; every change is
+///     checked with exact predicates.
+///  3. If more than `max_triangles` remain, whole components are left out, smallest volume
+///     first: leaving out part of an inside proxy keeps it inside.
+///  4. The result is proved as `visproxy verify` proves it (check_containment with
+///     contents_solid): every vertex strictly inside, no triangle touching the input, no
+///     input vertex inside the proxy. A failure there is a bug and throws visproxy::Error.
+///
+/// The result is closed, 2-manifold, self-intersection-free and outward-oriented; it may be
+/// empty when the solid is thinner everywhere than the grid resolves (reached_target is
+/// then true and the caller decides). If the budget cannot be met even so (a budget below
+/// 4 triangles per kept component is impossible) the smallest mesh reached is returned
+/// with reached_target = false: never a non-conservative one. Deterministic.
+///
+/// Throws InvalidInputError (empty file name) for max_triangles < 4, grid_cells < 4 or
+/// above 1024, an input that is not closed (naming its defects) or coordinates beyond
+/// kMaxCoordinate; visproxy::Error when the start fails its exact check on three shifted
+/// grids.
+InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptions& options);
+
+}  // namespace visproxy
