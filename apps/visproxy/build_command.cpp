@@ -84,7 +84,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
                       "Proxy to build (repeatable). aabb, obb, hull, hull:N (convex, at most N faces), wrap, "
                       "wrap:alpha=A,offset=O (relative to the bbox diagonal; defaults 0.05 and 1/600), outer:N "
                       "(non-convex outside mesh, at most N triangles), inner:N[,grid=G] (non-convex mesh of at most N triangles "
-                      "inside a closed mesh, started from a grid of G cells along the longest side, default 64), quadric:N (at most N triangles), cluster:F "
+                      "inside a closed mesh, started from a grid of G cells along the longest side, default sqrt(2N) within 16-256), quadric:N (at most N triangles), cluster:F "
                       "(cell F x largest bbox extent), inside:N (N spheres inscribed in a closed mesh: every edge used as often in each direction), "
                       "spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S] (circumsphere set merged to "
                       "N spheres keeping the GSSA; one proxy per level). Default: aabb obb hull hull:32 wrap outer:512 "

@@ -159,7 +159,9 @@ json params_of(const ProxySpec& spec, double diagonal, const BoundingBox& bounds
     case ProxyMethod::bounded_hull: return {{"max_faces", spec.count}};
     case ProxyMethod::outer_hull:
     case ProxyMethod::quadric: return {{"max_triangles", spec.count}};
-    case ProxyMethod::inner_hull: return {{"max_triangles", spec.count}, {"grid_cells", spec.grid_cells}};
+    case ProxyMethod::inner_hull:
+      return {{"max_triangles", spec.count},
+              {"grid_cells", spec.grid_cells != 0 ? spec.grid_cells : inner_hull_grid_cells(spec.count)}};
     case ProxyMethod::alpha_wrap:
       return {{"alpha_relative", spec.alpha_relative},
               {"offset_relative", spec.offset_relative},

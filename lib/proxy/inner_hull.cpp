@@ -309,11 +309,15 @@ TriangleMesh within_budget(TriangleMesh mesh, std::size_t max_triangles, std::si
 
 }  // namespace
 
+std::size_t inner_hull_grid_cells(std::size_t max_triangles) {
+  return static_cast<std::size_t>(std::clamp(std::round(std::sqrt(2.0 * static_cast<double>(max_triangles))), 16.0, 256.0));
+}
+
 InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptions& options) {
   if (options.max_triangles < 4)
     throw InvalidInputError("", "inner hull: max_triangles must be at least 4 (a closed surface), got " +
                                     std::to_string(options.max_triangles));
-  if (options.grid_cells < 4 || options.grid_cells > 1024)
+  if (options.grid_cells != 0 && (options.grid_cells < 4 || options.grid_cells > 1024))
     throw InvalidInputError("", "inner hull: grid_cells must be between 4 and 1024, got " +
                                     std::to_string(options.grid_cells));
   require_closed(input, "an inside proxy needs a closed mesh, whose solid it can lie in");
@@ -322,12 +326,13 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   const BoundingBox box = bounding_box(input);
   const detail::ConservativeInput geometry(input);
   InnerHullResult result;
+  result.grid_cells = options.grid_cells != 0 ? options.grid_cells : inner_hull_grid_cells(options.max_triangles);
   TriangleMesh start;
   for (std::size_t attempt = 0;; ++attempt) {
     if (attempt == kGridShifts.size())
       throw Error("inner hull: the grid surface did not pass its exact check on " + std::to_string(attempt) +
                   " shifted grids");
-    const Grid grid = make_grid(box, options.grid_cells, attempt);
+    const Grid grid = make_grid(box, result.grid_cells, attempt);
     result.grid_cell_world = grid.cell;
     const Windings windings = scanline_windings(input, grid);
     // Marked: inside, reliable and farther than half a cell from the surface. Safe: farther

@@ -9,7 +9,7 @@
 //   wrap:alpha=A,offset=O  alpha wrap; A, O relative to the bbox diagonal (either may be left out)
 //   outer:N              non-convex outside mesh, at most N triangles (outside)
 //   inner:N[,grid=G]     non-convex inside mesh, at most N triangles, started from a grid of
-//                        G cells along the longest side (default 64) (inside)
+//                        G cells along the longest side (default sqrt(2N), 16-256) (inside)
 //   quadric:N            quadric edge collapse to at most N triangles (general)
 //   cluster:F            vertex clustering, cell F x largest bbox extent (general)
 //   inside:N             N maximal spheres inscribed in a closed mesh (inside)
@@ -54,7 +54,7 @@ struct ProxySpec {
   ProxyMethod method = ProxyMethod::aabb;
   std::string text;               ///< the spec as given, e.g. "hull:32"
   std::size_t count = 0;          ///< N of hull:N, outer:N, inner:N, quadric:N, inside:N
-  std::size_t grid_cells = 64;    ///< G of inner:N,grid=G
+  std::size_t grid_cells = 0;     ///< G of inner:N,grid=G; 0: chosen from N (inner_hull_grid_cells)
   double cell_size_relative = 0;  ///< F of cluster:F
   double alpha_relative = kDefaultWrapAlphaRelative;    ///< wrap
   double offset_relative = kDefaultWrapOffsetRelative;  ///< wrap

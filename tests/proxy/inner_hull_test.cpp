@@ -82,6 +82,8 @@ void expect_valid_inner_hull(const TriangleMesh& input, const InnerHullOptions& 
   EXPECT_EQ(std::count(located.begin(), located.end(), PointLocation::inside),
             static_cast<std::ptrdiff_t>(points.size()));
   EXPECT_EQ(hull.reached_target, hull.mesh.triangles.size() <= options.max_triangles);
+  EXPECT_EQ(hull.grid_cells,
+            options.grid_cells != 0 ? options.grid_cells : inner_hull_grid_cells(options.max_triangles));
   EXPECT_GE(hull.start_triangles, hull.mesh.triangles.size());
   EXPECT_TRUE(std::isfinite(hull.max_distance_to_input_world));
   EXPECT_GT(hull.max_distance_to_input_world, 0.0);
@@ -175,7 +177,7 @@ TEST(InnerHull, InputsWithoutASolidAreRejectedNamingTheDefect) {
   EXPECT_THROW(build_inner_hull(TriangleMesh{}, {}), InvalidInputError);
   for (const std::size_t budget : {0, 1, 3})
     EXPECT_THROW(build_inner_hull(testing::unit_cube(), {.max_triangles = budget}), InvalidInputError);
-  for (const std::size_t cells : {0, 3, 1025})
+  for (const std::size_t cells : {1, 3, 1025})
     EXPECT_THROW(build_inner_hull(testing::unit_cube(), {.grid_cells = cells}), InvalidInputError);
 }
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "visproxy/core/errors.h"
 
 namespace visproxy {
@@ -26,6 +28,28 @@ TEST(ProxySpec, ParsesEveryMethodAndNamesIt) {
   EXPECT_DOUBLE_EQ(cluster.cell_size_relative, 0.03);
   EXPECT_EQ(cluster.name(), "cluster-0.03");
   EXPECT_EQ(cluster.kind(), ProxyKind::general);
+}
+
+TEST(ProxySpec, InnerHullTakesABudgetAndAGrid) {
+  const ProxySpec inner = parse_proxy_spec("inner:512");
+  EXPECT_EQ(inner.method, ProxyMethod::inner_hull);
+  EXPECT_EQ(inner.count, 512u);
+  EXPECT_EQ(inner.grid_cells, 0u);  // chosen from the budget
+  EXPECT_EQ(inner.kind(), ProxyKind::inside);
+  EXPECT_EQ(inner.name(), "inner-512");
+  const ProxySpec gridded = parse_proxy_spec("inner:256,grid=48");
+  EXPECT_EQ(gridded.count, 256u);
+  EXPECT_EQ(gridded.grid_cells, 48u);
+  EXPECT_EQ(gridded.name(), "inner-256-grid=48");
+  for (const char* bad : {"inner", "inner:", "inner:3", "inner:x", "inner:64,grid=3", "inner:64,grid=2000",
+                          "inner:64,cells=8", "inner:64,grid="}) {
+    try {
+      parse_proxy_spec(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(std::string("'") + bad + "'"), std::string::npos) << error.what();
+    }
+  }
 }
 
 TEST(ProxySpec, WrapParametersDefaultAndOverride) {
