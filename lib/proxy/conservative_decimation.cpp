@@ -212,6 +212,58 @@ class InputGeometry {
     return false;
   }
 
+  /// Does the triangle (which meets no input triangle) come within `clearance` of one?
+  /// Distances in double precision between disjoint triangles, attained at a corner and a
+  /// triangle or at two sides; `clearance` is enlarged by 1e-9 relative against rounding.
+  bool comes_within(const CgalTriangle& t, double clearance) const {
+    const CGAL::Bbox_3 b = t.bbox();
+    const CGAL::Bbox_3 query(b.xmin() - clearance, b.ymin() - clearance, b.zmin() - clearance, b.xmax() + clearance,
+                             b.ymax() + clearance, b.zmax() + clearance);
+    const double limit = clearance * (1 + 1e-9);
+    const double limit_squared = limit * limit;
+    // Cheap test first: a triangle wholly beyond the clearance on one side of t's plane.
+    const Vertex ta(t.vertex(0).x(), t.vertex(0).y(), t.vertex(0).z());
+    const Vertex tb(t.vertex(1).x(), t.vertex(1).y(), t.vertex(1).z());
+    const Vertex tc(t.vertex(2).x(), t.vertex(2).y(), t.vertex(2).z());
+    const Vertex normal = (tb - ta).cross(tc - ta).normalized();
+    const double beyond = 2 * limit;  // generous against the rounding of this test
+    auto close_to_triangle = [&](const CgalTriangle& u) {
+      if (normal.allFinite()) {
+        std::array<double, 3> side{};
+        for (int i = 0; i < 3; ++i)
+          side[static_cast<std::size_t>(i)] =
+              normal.dot(Vertex(u.vertex(i).x(), u.vertex(i).y(), u.vertex(i).z()) - ta);
+        if (std::min({side[0], side[1], side[2]}) > beyond || std::max({side[0], side[1], side[2]}) < -beyond)
+          return false;
+      }
+      for (int i = 0; i < 3; ++i) {
+        if (CGAL::to_double(CGAL::squared_distance(t.vertex(i), u)) < limit_squared) return true;
+        if (CGAL::to_double(CGAL::squared_distance(u.vertex(i), t)) < limit_squared) return true;
+      }
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (CGAL::to_double(CGAL::squared_distance(CgalSegment(t.vertex(i), t.vertex(i + 1)),
+                                                     CgalSegment(u.vertex(j), u.vertex(j + 1)))) < limit_squared)
+            return true;
+      return false;
+    };
+    scratch_hits_.clear();
+    triangle_tree_.all_intersected_primitives(query, std::back_inserter(scratch_hits_));
+    for (const auto& id : scratch_hits_)
+      if (close_to_triangle(*id)) return true;
+    for (const CgalSegment& segment : segments_) {  // degenerate input triangles
+      if (CGAL::to_double(CGAL::squared_distance(segment.source(), t)) < limit_squared ||
+          CGAL::to_double(CGAL::squared_distance(segment.target(), t)) < limit_squared)
+        return true;
+      for (int i = 0; i < 3; ++i)
+        if (CGAL::to_double(CGAL::squared_distance(segment, CgalSegment(t.vertex(i), t.vertex(i + 1)))) < limit_squared)
+          return true;
+    }
+    for (const Point& p : points_)
+      if (CGAL::to_double(CGAL::squared_distance(p, t)) < limit_squared) return true;
+    return false;
+  }
+
   double distance(const Point& p) const {
     double squared = std::numeric_limits<double>::infinity();
     if (!triangles_.empty()) squared = std::min(squared, CGAL::to_double(triangle_tree_.squared_distance(p)));
@@ -271,6 +323,7 @@ class InputGeometry {
       cell_items_[fill[cell_of_item[i]]++] = static_cast<std::uint32_t>(i);
   }
 
+  mutable std::vector<TrianglePrimitive::Id> scratch_hits_;
   std::vector<CgalTriangle> triangles_;
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
@@ -556,7 +609,9 @@ class ConservativeDecimator::Impl {
 
   /// Moves vertices inwards, towards the input, where the checks allow it: each vertex is
   /// tried at fractions of its distance to the input along minus its normal.
-  void shrink_vertices() {
+  void set_clearance(double keep_clear) { keep_clear_ = keep_clear; }
+
+  void shrink_vertices(double keep_clear) {
     for (VertexIndex v = 0; v < positions_.size(); ++v) {
       if (!vertex_alive_[v]) continue;
       Vertex normal = Vertex::Zero();
@@ -567,7 +622,8 @@ class ConservativeDecimator::Impl {
       }
       if (!(normal.norm() > 0)) continue;
       normal.normalize();
-      const double clearance = input_.distance(to_point(positions_[v]));
+      const double clearance = input_.distance(to_point(positions_[v])) - keep_clear;
+      if (!(clearance > 0)) continue;
       for (const double fraction : {0.9, 0.6, 0.3}) {
         const Vertex target = positions_[v] - fraction * clearance * normal;
         const StarReplacement replacement = move_replacement(v, target);
@@ -818,6 +874,10 @@ class ConservativeDecimator::Impl {
     if (!fan_outside)
       for (const TriangleCorners& c : r.created)
         if (input_.meets(CgalTriangle(c.points[0], c.points[1], c.points[2]))) return false;
+    // The clearance asked for, whichever side the fan is on.
+    if (keep_clear_ > 0)
+      for (const TriangleCorners& c : r.created)
+        if (input_.comes_within(CgalTriangle(c.points[0], c.points[1], c.points[2]), keep_clear_)) return false;
 
     // (d) No input component changes side: test the representatives inside the closed
     // surface old star ∪ new fan.
@@ -923,6 +983,7 @@ class ConservativeDecimator::Impl {
   }
 
   const InputGeometry& input_;
+  double keep_clear_ = 0;
   std::vector<Vertex> positions_;
   std::vector<Triangle> triangles_;
   std::vector<std::uint8_t> triangle_alive_;
@@ -1095,7 +1156,8 @@ ConservativeDecimator::ConservativeDecimator(const TriangleMesh& surface, const 
 ConservativeDecimator::~ConservativeDecimator() = default;
 std::size_t ConservativeDecimator::triangle_count() const { return impl_->triangle_count(); }
 void ConservativeDecimator::collapse_edges(std::size_t max_triangles) { impl_->collapse_edges(max_triangles); }
-void ConservativeDecimator::move_towards_input() { impl_->shrink_vertices(); }
+void ConservativeDecimator::move_towards_input(double keep_clear) { impl_->shrink_vertices(keep_clear); }
+void ConservativeDecimator::keep_clear_by(double clearance) { impl_->set_clearance(clearance); }
 TriangleMesh ConservativeDecimator::result() const { return impl_->result(); }
 
 }  // namespace visproxy::detail

@@ -69,12 +69,17 @@ class ConservativeDecimator {
   ConservativeDecimator& operator=(const ConservativeDecimator&) = delete;
 
   std::size_t triangle_count() const;
+  /// From now on every new triangle must also keep `clearance` (world units, double
+  /// precision distances) from the input, on either side; 0 (the default) asks only that
+  /// it does not meet the input.
+  void keep_clear_by(double clearance);
   /// Collapses edges, the one that moves the surface through the least volume first, until
   /// at most `max_triangles` remain or no collapse passes the checks.
   void collapse_edges(std::size_t max_triangles);
   /// Moves each vertex towards the input, along minus its normal, by 90 %, 60 % or 30 % of
-  /// its distance to the input: the first that passes the checks.
-  void move_towards_input();
+  /// its distance to the input less `keep_clear` (world units): the first that passes the
+  /// checks. A vertex then stays at least 0.1 x its distance + 0.9 x keep_clear away.
+  void move_towards_input(double keep_clear = 0);
   /// The current surface, with unused vertices dropped.
   TriangleMesh result() const;
 

@@ -320,6 +320,9 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   if (options.grid_cells != 0 && (options.grid_cells < 4 || options.grid_cells > 1024))
     throw InvalidInputError("", "inner hull: grid_cells must be between 4 and 1024, got " +
                                     std::to_string(options.grid_cells));
+  if (!(options.clearance_relative >= 0 && options.clearance_relative < 0.1))
+    throw InvalidInputError("", "inner hull: clearance_relative must be in [0, 0.1), got " +
+                                    std::to_string(options.clearance_relative));
   require_closed(input, "an inside proxy needs a closed mesh, whose solid it can lie in");
   require_coordinates_in_range(input, "");
 
@@ -327,6 +330,7 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   const detail::ConservativeInput geometry(input);
   InnerHullResult result;
   result.grid_cells = options.grid_cells != 0 ? options.grid_cells : inner_hull_grid_cells(options.max_triangles);
+  const double keep_clear = options.clearance_relative * box.diagonal();
   TriangleMesh start;
   for (std::size_t attempt = 0;; ++attempt) {
     if (attempt == kGridShifts.size())
@@ -433,17 +437,33 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   if (!start.triangles.empty()) {
     // Towards the budget in stages, each followed by a pass of moves towards the input:
     // collapses only ever shrink the proxy, and on coarse meshes each removes much.
+    // The start keeps about a twentieth of a cell from the input, far more than the
+    // clearance; collapses only move the surface away. The clearance is checked from the
+    // first moves towards the input on.
     detail::ConservativeDecimator decimator(start, geometry);
     for (const std::size_t factor : {std::size_t{8}, std::size_t{4}, std::size_t{2}}) {
       decimator.collapse_edges(factor * options.max_triangles);
-      decimator.move_towards_input();
+      decimator.keep_clear_by(keep_clear);
+      decimator.move_towards_input(keep_clear);
     }
     decimator.collapse_edges(options.max_triangles);
     mesh = within_budget(flipped(decimator.result()), options.max_triangles, result.components_dropped);
     detail::ConservativeDecimator last(flipped(mesh), geometry);
+    last.keep_clear_by(keep_clear);
     last.collapse_edges(options.max_triangles);
-    for (std::size_t pass = 0; pass < options.relax_passes; ++pass) last.move_towards_input();
     mesh = within_budget(flipped(last.result()), options.max_triangles, result.components_dropped);
+    // The final moves keep the clearance; a pass that breaks it is undone, and so on.
+    detail::ConservativeDecimator relaxed(flipped(mesh), geometry);
+    relaxed.keep_clear_by(keep_clear);
+    std::vector<TriangleMesh> passes{mesh};
+    for (std::size_t pass = 0; pass < options.relax_passes; ++pass) {
+      relaxed.move_towards_input(keep_clear);
+      passes.push_back(flipped(relaxed.result()));
+    }
+    while (passes.size() > 1 && !surfaces_clear_by(passes.back(), input, keep_clear)) passes.pop_back();
+    result.relax_passes_kept = passes.size() - 1;
+    result.clearance_kept = surfaces_clear_by(passes.back(), input, keep_clear);
+    mesh = std::move(passes.back());
   }
   result.reached_target = mesh.triangles.size() <= options.max_triangles;
   if (!mesh.triangles.empty()) {

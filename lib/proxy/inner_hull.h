@@ -20,6 +20,12 @@ struct InnerHullOptions {
   /// Passes of moving every vertex towards the input after the collapses (each vertex by
   /// 90 %, 60 % or 30 % of its distance to the input, the first the checks allow).
   std::size_t relax_passes = 6;
+  /// Clearance the moves towards the input keep, relative to the bounding-box diagonal:
+  /// renderers in single precision keep a proof only for a proxy that keeps the rounding
+  /// bound (2^-21 of the coordinates' magnitude) from the mesh, which a mesh instanced at
+  /// a thousandth of a scene 1 000 units across still gets. Passes are undone, last first,
+  /// while the surface comes closer than this to the input (surfaces_clear_by).
+  double clearance_relative = 1e-4;
 };
 
 struct InnerHullResult {
@@ -33,6 +39,10 @@ struct InnerHullResult {
   /// (see OuterHullResult::max_distance_to_input_world): how deep the proxy may sit.
   double max_distance_to_input_world = 0;
   double volume = 0;  ///< enclosed volume of the proxy, input units cubed
+  /// Whether every point of the proxy surface keeps clearance_relative x diagonal from the
+  /// input (the exact claim holds either way; renderers may use the proxy as general).
+  bool clearance_kept = false;
+  std::size_t relax_passes_kept = 0;  ///< moves towards the input kept under the clearance
 };
 
 /// The grid build_inner_hull uses for a budget of `max_triangles` when grid_cells is 0:

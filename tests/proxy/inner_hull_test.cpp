@@ -87,6 +87,10 @@ void expect_valid_inner_hull(const TriangleMesh& input, const InnerHullOptions& 
   EXPECT_GE(hull.start_triangles, hull.mesh.triangles.size());
   EXPECT_TRUE(std::isfinite(hull.max_distance_to_input_world));
   EXPECT_GT(hull.max_distance_to_input_world, 0.0);
+  // The clearance, when claimed, by the library's own distance test.
+  if (hull.clearance_kept) {
+    EXPECT_TRUE(surfaces_clear_by(hull.mesh, input, options.clearance_relative * bounding_box(input).diagonal()));
+  }
 }
 
 TEST(InnerHull, CubeIsFilledAlmostWholly) {
@@ -192,6 +196,7 @@ TEST_P(InnerHullOfRealMesh, IsAConservativeInsideProxyWithinBudget) {
   const InnerHullResult hull = build_inner_hull(mesh, options);
   expect_valid_inner_hull(mesh, options, hull);
   EXPECT_TRUE(hull.reached_target);
+  EXPECT_TRUE(hull.clearance_kept);
   const Containment proof = check_containment(mesh, hull.mesh, {.check_surface = true, .contents_solid = true});
   EXPECT_TRUE(proof.contained());
 }

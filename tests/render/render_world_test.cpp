@@ -11,6 +11,7 @@
 
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/sphere_set.h"
+#include "visproxy/proxy/inner_hull.h"
 #include "render/render_test_scenes.h"
 #include "visproxy/render/renderer.h"
 #include "visproxy/verify/containment.h"
@@ -172,6 +173,37 @@ TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
   EXPECT_TRUE(world.has_inside_proxies());
   EXPECT_EQ(world.stochastic_kind(1), ProxyKind::inside);
   EXPECT_TRUE(world.notes().empty());
+}
+
+// inner:N is an inside proxy made of triangles: built on the room seen from outside, it
+// keeps its clearance (1e-4 of the diagonal, far above the float rounding bound), so the
+// world uses it as an inside proxy, and bounds proves umbrae with it yet renders exactly
+// what exact visibility renders.
+TEST(RenderWorld, InnerHullIsUsedAsAnInsideProxy) {
+  ClosedRoom s = closed_room();
+  s.scene.meshes[0].mesh = box({-3, -3, -3}, {3, 3, 3});
+  s.scene.lights = {downward_light({0, 0, 5}, 1.5)};
+  s.scene.camera.from = {5, -6, 4};
+  s.scene.camera.at = {0, 0, 0};
+  s.scene.instances.resize(1);
+  s.scene.meshes[1].mesh = quad({-9, -9, -3.01}, {18, 0, 0}, {0, 18, 0});
+  s.scene.instances.push_back({"crate", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  const InnerHullResult inner = build_inner_hull(s.scene.meshes[0].mesh, {.max_triangles = 64, .grid_cells = 16});
+  ASSERT_TRUE(inner.clearance_kept);
+  ASSERT_TRUE(check_containment(s.scene.meshes[0].mesh, inner.mesh, {.contents_solid = true}).contained());
+  const InstanceProxy proxy{ProxyKind::inside, "inner:64", inner.mesh, {}, true};
+  s.proxies.assign(2, {});
+  s.proxies[0].stochastic = proxy;
+  s.proxies[0].inside = proxy;
+  const RenderWorld world(s.scene, s.proxies);
+  EXPECT_TRUE(world.has_inside_proxies());
+  EXPECT_EQ(world.stochastic_kind(1), ProxyKind::inside);  // segments from the floor
+  EXPECT_TRUE(world.notes().empty()) << world.notes().front();
+  // From the floor under the room's middle straight up to the light: through the proxy.
+  EXPECT_TRUE(world.inside_blocks({0.1, 0.2, -3.005}, {0.2, 0.1, 4.99}));
+  const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 4, .seed = 9});
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_GT(b.stats.bounds_occluded, 0u);
 }
 
 // A closed convex instance without a proxy stands in for itself exactly: a glass case
