@@ -436,10 +436,9 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   TriangleMesh mesh;
   if (!start.triangles.empty()) {
     // Towards the budget in stages, each followed by a pass of moves towards the input:
-    // collapses only ever shrink the proxy, and on coarse meshes each removes much.
-    // The start keeps about a twentieth of a cell from the input, far more than the
-    // clearance; collapses only move the surface away. The clearance is checked from the
-    // first moves towards the input on.
+    // collapses only ever shrink the proxy, and on coarse meshes each removes much. New
+    // triangles keep the clearance from the first moves on (the start's vertices keep a
+    // twentieth of a cell, far more); whether the result keeps it is tested at the end.
     detail::ConservativeDecimator decimator(start, geometry);
     for (const std::size_t factor : {std::size_t{8}, std::size_t{4}, std::size_t{2}}) {
       decimator.collapse_edges(factor * options.max_triangles);
@@ -460,9 +459,9 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
       relaxed.move_towards_input(keep_clear);
       passes.push_back(flipped(relaxed.result()));
     }
-    while (passes.size() > 1 && !surfaces_clear_by(passes.back(), input, keep_clear)) passes.pop_back();
+    while (!(result.clearance_kept = surfaces_clear_by(passes.back(), input, keep_clear)) && passes.size() > 1)
+      passes.pop_back();
     result.relax_passes_kept = passes.size() - 1;
-    result.clearance_kept = surfaces_clear_by(passes.back(), input, keep_clear);
     mesh = std::move(passes.back());
   }
   result.reached_target = mesh.triangles.size() <= options.max_triangles;

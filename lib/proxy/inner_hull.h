@@ -64,8 +64,11 @@ std::size_t inner_hull_grid_cells(std::size_t max_triangles);
 ///     checked exactly (conservative_decimation.h: starts_conservative), not assumed.
 ///  2. Collapse edges, the one that removes the least volume first, each merged vertex
 ///     placed on the inner side of the planes of the triangles it replaces (a 3-variable
-///     LP), then move vertices towards the input `relax_passes` times; every change is
-///     checked with exact predicates.
+///     LP), in stages down to 8, 4, 2 and 1 times the budget with a pass of moves towards
+///     the input after each, then `relax_passes` more passes; every change is checked with
+///     exact predicates, and from the first moves on new triangles must also keep the
+///     clearance (clearance_relative) from the input. Final passes are undone, last first,
+///     while the surface does not keep it.
 ///  3. If more than `max_triangles` remain, whole components are left out, smallest volume
 ///     first: leaving out part of an inside proxy keeps it inside.
 ///  4. The result is proved as `visproxy verify` proves it (check_containment with
