@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
-#include "visproxy/core/random.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/surface_samples.h"
 #include "visproxy/verify/containment.h"
 #include "proxy/outside_proxy_checks.h"
 #include "test_meshes.h"
@@ -30,31 +30,10 @@ TriangleMesh box_mesh(const Vertex& lo, const Vertex& hi, bool inward = false) {
 
 std::size_t used_vertex_count(const TriangleMesh& mesh) { return used_positions(mesh).size(); }
 
-// Enclosed volume, summed about the box centre so that far-off coordinates do not cancel.
-double volume_about_centre(const TriangleMesh& mesh) {
-  const BoundingBox box = bounding_box(mesh);
-  const Vertex c = 0.5 * (box.min + box.max);
-  double six_volume = 0;
-  for (const Triangle& t : mesh.triangles)
-    six_volume += (mesh.positions[t[0]] - c).dot((mesh.positions[t[1]] - c).cross(mesh.positions[t[2]] - c));
-  return six_volume / 6;
-}
-
-// Points spread over the proxy's triangles (and its vertices).
+// The proxy's vertices and points spread over its triangles.
 std::vector<Vertex> surface_points(const TriangleMesh& mesh, std::size_t samples) {
   std::vector<Vertex> points = mesh.positions;
-  Random random(11);
-  for (std::size_t i = 0; i < samples && !mesh.triangles.empty(); ++i) {
-    const Triangle& t = mesh.triangles[random.below(mesh.triangles.size())];
-    double u = random.uniform();
-    double v = random.uniform();
-    if (u + v > 1) {
-      u = 1 - u;
-      v = 1 - v;
-    }
-    const Vertex& a = mesh.positions[t[0]];
-    points.push_back(a + u * (mesh.positions[t[1]] - a) + v * (mesh.positions[t[2]] - a));
-  }
+  for (const SurfaceSample& sample : sample_surface(mesh, samples, 11)) points.push_back(sample.position);
   return points;
 }
 
@@ -72,9 +51,8 @@ void expect_valid_inner_hull(const TriangleMesh& input, const InnerHullOptions& 
   EXPECT_EQ(f.topology.referenced_vertices, hull.mesh.positions.size()) << "unreferenced proxy vertices";
   EXPECT_EQ(f.degenerate_triangles, 0u);
   EXPECT_EQ(f.self_intersections, 0u);
-  const double volume = volume_about_centre(hull.mesh);
-  EXPECT_GT(volume, 0.0) << "not outward-oriented";
-  EXPECT_NEAR(volume, hull.volume, 1e-9 * std::abs(hull.volume));
+  EXPECT_GT(signed_volume(hull.mesh), 0.0) << "not outward-oriented";  // about the box centre: far-off meshes too
+  EXPECT_EQ(signed_volume(hull.mesh), hull.volume);
   EXPECT_EQ(f.input_triangles_touching, 0u);
   EXPECT_EQ(f.input_vertices_not_inside, used_vertex_count(input)) << "input vertices inside the proxy";
   const std::vector<Vertex> points = surface_points(hull.mesh, 2000);

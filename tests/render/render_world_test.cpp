@@ -157,8 +157,8 @@ TEST(RenderWorld, ClosedRoomsInsideProxyProvesNothingAboutItsAir) {
   EXPECT_GT(b.stats.bounds_traced, 0u);  // the bead's loose box sent segments to the exact test
 }
 
-// The same room seen from outside (faces outwards, light outside): the ball proves.
-TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
+// The same room seen from outside (faces outwards, light outside), on a floor.
+ClosedRoom room_seen_from_outside() {
   ClosedRoom s = closed_room();
   s.scene.meshes[0].mesh = box({-3, -3, -3}, {3, 3, 3});
   s.scene.lights = {downward_light({0, 0, 5}, 1.5)};
@@ -169,6 +169,12 @@ TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
   s.scene.meshes[1].mesh = quad({-9, -9, -3.01}, {18, 0, 0}, {0, 18, 0});  // a floor under the room
   s.scene.instances.push_back({"crate", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
   s.proxies.resize(2);
+  return s;
+}
+
+// Seen from outside, the room's ball proves.
+TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
+  const ClosedRoom s = room_seen_from_outside();
   const RenderWorld world(s.scene, s.proxies);
   EXPECT_TRUE(world.has_inside_proxies());
   EXPECT_EQ(world.stochastic_kind(1), ProxyKind::inside);
@@ -180,14 +186,7 @@ TEST(RenderWorld, InsideProxyProvesWhenTheLightIsOutsideTheSolid) {
 // world uses it as an inside proxy, and bounds proves umbrae with it yet renders exactly
 // what exact visibility renders.
 TEST(RenderWorld, InnerHullIsUsedAsAnInsideProxy) {
-  ClosedRoom s = closed_room();
-  s.scene.meshes[0].mesh = box({-3, -3, -3}, {3, 3, 3});
-  s.scene.lights = {downward_light({0, 0, 5}, 1.5)};
-  s.scene.camera.from = {5, -6, 4};
-  s.scene.camera.at = {0, 0, 0};
-  s.scene.instances.resize(1);
-  s.scene.meshes[1].mesh = quad({-9, -9, -3.01}, {18, 0, 0}, {0, 18, 0});
-  s.scene.instances.push_back({"crate", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  ClosedRoom s = room_seen_from_outside();
   const InnerHullResult inner = build_inner_hull(s.scene.meshes[0].mesh, {.max_triangles = 64, .grid_cells = 16});
   ASSERT_TRUE(inner.clearance_kept);
   ASSERT_TRUE(check_containment(s.scene.meshes[0].mesh, inner.mesh, {.contents_solid = true}).contained());
