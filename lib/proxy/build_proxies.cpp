@@ -109,7 +109,7 @@ Piece build_piece(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOp
                       {"grid_cell_world", inner.grid_cell_world},
                       {"components_dropped", inner.components_dropped},
                       {"volume", inner.volume},
-                      {"clearance_world", InnerHullOptions{}.clearance_relative * bounding_box(mesh).diagonal()},
+                      {"clearance_world", inner.clearance_world},
                       {"clearance_kept", inner.clearance_kept},
                       {"relax_passes_kept", inner.relax_passes_kept},
                       {"max_distance_to_input_world", inner.max_distance_to_input_world}};

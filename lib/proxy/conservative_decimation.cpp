@@ -251,7 +251,10 @@ class InputGeometry {
     triangle_tree_.all_intersected_primitives(query, std::back_inserter(scratch_hits_));
     for (const auto& id : scratch_hits_)
       if (close_to_triangle(*id)) return true;
-    for (const CgalSegment& segment : segments_) {  // degenerate input triangles
+    scratch_segment_hits_.clear();
+    if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(scratch_segment_hits_));
+    for (const auto& id : scratch_segment_hits_) {  // degenerate input triangles
+      const CgalSegment& segment = *id;
       if (CGAL::to_double(CGAL::squared_distance(segment.source(), t)) < limit_squared ||
           CGAL::to_double(CGAL::squared_distance(segment.target(), t)) < limit_squared)
         return true;
@@ -324,6 +327,7 @@ class InputGeometry {
   }
 
   mutable std::vector<TrianglePrimitive::Id> scratch_hits_;
+  mutable std::vector<SegmentPrimitive::Id> scratch_segment_hits_;
   std::vector<CgalTriangle> triangles_;
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
@@ -611,7 +615,7 @@ class ConservativeDecimator::Impl {
   /// tried at fractions of its distance to the input along minus its normal.
   void set_clearance(double keep_clear) { keep_clear_ = keep_clear; }
 
-  void shrink_vertices(double keep_clear) {
+  void shrink_vertices() {
     for (VertexIndex v = 0; v < positions_.size(); ++v) {
       if (!vertex_alive_[v]) continue;
       Vertex normal = Vertex::Zero();
@@ -622,7 +626,7 @@ class ConservativeDecimator::Impl {
       }
       if (!(normal.norm() > 0)) continue;
       normal.normalize();
-      const double clearance = input_.distance(to_point(positions_[v])) - keep_clear;
+      const double clearance = input_.distance(to_point(positions_[v])) - keep_clear_;
       if (!(clearance > 0)) continue;
       for (const double fraction : {0.9, 0.6, 0.3}) {
         const Vertex target = positions_[v] - fraction * clearance * normal;
@@ -1156,7 +1160,7 @@ ConservativeDecimator::ConservativeDecimator(const TriangleMesh& surface, const 
 ConservativeDecimator::~ConservativeDecimator() = default;
 std::size_t ConservativeDecimator::triangle_count() const { return impl_->triangle_count(); }
 void ConservativeDecimator::collapse_edges(std::size_t max_triangles) { impl_->collapse_edges(max_triangles); }
-void ConservativeDecimator::move_towards_input(double keep_clear) { impl_->shrink_vertices(keep_clear); }
+void ConservativeDecimator::move_towards_input() { impl_->shrink_vertices(); }
 void ConservativeDecimator::keep_clear_by(double clearance) { impl_->set_clearance(clearance); }
 TriangleMesh ConservativeDecimator::result() const { return impl_->result(); }
 

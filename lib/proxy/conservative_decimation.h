@@ -77,9 +77,9 @@ class ConservativeDecimator {
   /// at most `max_triangles` remain or no collapse passes the checks.
   void collapse_edges(std::size_t max_triangles);
   /// Moves each vertex towards the input, along minus its normal, by 90 %, 60 % or 30 % of
-  /// its distance to the input less `keep_clear` (world units): the first that passes the
-  /// checks. A vertex then stays at least 0.1 x its distance + 0.9 x keep_clear away.
-  void move_towards_input(double keep_clear = 0);
+  /// its distance to the input less the clearance (keep_clear_by): the first that passes
+  /// the checks. A vertex then stays at least 0.1 x its distance + 0.9 x the clearance away.
+  void move_towards_input();
   /// The current surface, with unused vertices dropped.
   TriangleMesh result() const;
 

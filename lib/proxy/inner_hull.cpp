@@ -8,12 +8,14 @@
 //   tetrahedral cells", IEICE Transactions E74-D(1), 1991: marching tetrahedra.
 //
 // Why the start lies inside: a grid point p is marked when the input's winding number
-// there is not zero and its distance d(p) to the surface exceeds the diagonal of a grid
-// cell. The open ball B(p, d(p)) meets no input triangle and holds p, so the winding number
-// is constant and non-zero on it: the ball lies in the solid. Each cell is cut into six
-// tetrahedra around its main diagonal, so every tetrahedron lies in the ball of any of its
-// corners, and a surface piece of marching tetrahedra lies in a tetrahedron with a marked
-// corner. The argument needs the winding numbers right; those come from crossings counted
+// there is not zero and its distance d(p) to the surface exceeds half a grid cell. The open
+// ball B(p, d(p)) meets no input triangle and holds p, so the winding number is constant
+// and non-zero on it: the ball lies in the solid, and so does every vertex placed on an
+// edge from p within 0.9 d(p). A point is safe when d(p) exceeds a cell's diagonal: each
+// cell is cut into six tetrahedra around its main diagonal, so every tetrahedron at a safe
+// point lies in its ball. Pieces in tetrahedra without a safe corner are tested exactly
+// against the input and pulled back (their corners unmarked) while they meet it. The
+// argument needs the winding numbers right; those come from crossings counted
 // along scanlines with edge functions evaluated identically for the two triangles of an
 // edge, and a scanline that passes exactly through an edge or a corner marks none of its
 // points. Nothing is taken on trust: the start is checked exactly before decimation and the
@@ -25,7 +27,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <numeric>
 #include <string>
 #include <unordered_map>
@@ -330,7 +331,8 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
   const detail::ConservativeInput geometry(input);
   InnerHullResult result;
   result.grid_cells = options.grid_cells != 0 ? options.grid_cells : inner_hull_grid_cells(options.max_triangles);
-  const double keep_clear = options.clearance_relative * box.diagonal();
+  result.clearance_world = options.clearance_relative * box.diagonal();
+  const double keep_clear = result.clearance_world;
   TriangleMesh start;
   for (std::size_t attempt = 0;; ++attempt) {
     if (attempt == kGridShifts.size())
@@ -443,7 +445,7 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
     for (const std::size_t factor : {std::size_t{8}, std::size_t{4}, std::size_t{2}}) {
       decimator.collapse_edges(factor * options.max_triangles);
       decimator.keep_clear_by(keep_clear);
-      decimator.move_towards_input(keep_clear);
+      decimator.move_towards_input();
     }
     decimator.collapse_edges(options.max_triangles);
     mesh = within_budget(flipped(decimator.result()), options.max_triangles, result.components_dropped);
@@ -456,7 +458,7 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
     relaxed.keep_clear_by(keep_clear);
     std::vector<TriangleMesh> passes{mesh};
     for (std::size_t pass = 0; pass < options.relax_passes; ++pass) {
-      relaxed.move_towards_input(keep_clear);
+      relaxed.move_towards_input();
       passes.push_back(flipped(relaxed.result()));
     }
     while (!(result.clearance_kept = surfaces_clear_by(passes.back(), input, keep_clear)) && passes.size() > 1)

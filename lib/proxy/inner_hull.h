@@ -39,8 +39,9 @@ struct InnerHullResult {
   /// (see OuterHullResult::max_distance_to_input_world): how deep the proxy may sit.
   double max_distance_to_input_world = 0;
   double volume = 0;  ///< enclosed volume of the proxy, input units cubed
-  /// Whether every point of the proxy surface keeps clearance_relative x diagonal from the
-  /// input (the exact claim holds either way; renderers may use the proxy as general).
+  double clearance_world = 0;  ///< clearance_relative x the input's diagonal
+  /// Whether every point of the proxy surface keeps clearance_world from the input (the
+  /// exact claim holds either way; renderers may use the proxy as general).
   bool clearance_kept = false;
   std::size_t relax_passes_kept = 0;  ///< moves towards the input kept under the clearance
 };

@@ -66,8 +66,9 @@ void expect_valid_inner_hull(const TriangleMesh& input, const InnerHullOptions& 
   EXPECT_TRUE(std::isfinite(hull.max_distance_to_input_world));
   EXPECT_GT(hull.max_distance_to_input_world, 0.0);
   // The clearance, when claimed, by the library's own distance test.
+  EXPECT_DOUBLE_EQ(hull.clearance_world, options.clearance_relative * bounding_box(input).diagonal());
   if (hull.clearance_kept) {
-    EXPECT_TRUE(surfaces_clear_by(hull.mesh, input, options.clearance_relative * bounding_box(input).diagonal()));
+    EXPECT_TRUE(surfaces_clear_by(hull.mesh, input, hull.clearance_world));
   }
 }
 
