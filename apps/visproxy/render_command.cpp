@@ -46,7 +46,13 @@ struct RenderCommandOptions {
   std::filesystem::path cache;
   double exposure = 1.0;
   bool maps = false;
+  std::filesystem::path cut_reference;
   bool count = false;
+  int light_points = 1024;
+  double error = 0.02;
+  int max_cut = 1000;
+  VisibilityBounds visibility_bounds = VisibilityBounds::none;
+  bool check_proofs = false;
   int width = 0, height = 0;
 };
 
@@ -78,13 +84,39 @@ void add_render_command(CLI::App& app, int& exit_code) {
                    "exactly); spheres: each instance's sphere-set proxy as occluder disks, biased by design (instances "
                    "without one traced exactly) [default: exact]")
       ->transform(CLI::CheckedTransformer(modes, CLI::ignore_case));
-  const std::map<std::string, IntegratorKind> integrators{{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}};
+  const std::map<std::string, IntegratorKind> integrators{
+      {"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}, {"lightcuts", IntegratorKind::lightcuts}};
   command
       ->add_option("--integrator", o->integrator,
                    "direct: M area-light samples per camera sample; vpl: those plus every virtual point light left by N "
-                   "light paths of B bounces (instant radiosity) [default: direct]")
+                   "light paths of B bounces (instant radiosity); lightcuts: K point lights per area light (plus the VPLs "
+                   "of --vpls, if given) shaded through a lightcut (Walter et al. 2005), each cluster by a representative "
+                   "traced exactly [default: direct]")
       ->transform(CLI::CheckedTransformer(integrators, CLI::ignore_case));
-  command->add_option("--vpls", o->vpls, "vpl: light paths traced from the area lights (N) [default: 1024]")->check(CLI::Range(1, 1 << 22));
+  CLI::Option* vpls_option =
+      command->add_option("--vpls", o->vpls, "vpl: light paths traced from the area lights (N); lightcuts: add their VPLs to the point lights [default: 1024; lightcuts: none]")
+          ->check(CLI::Range(1, 1 << 22));
+  command->add_option("--light-points", o->light_points, "lightcuts: point lights per area light (K), stratified over its area [default: 1024]")
+      ->check(CLI::Range(1, 1 << 22));
+  command->add_option("--error", o->error,
+                      "lightcuts: refine the cut until every cluster's error bound is at most this fraction of the cut's total "
+                      "(0: every light its own cluster, up to --max-cut) [default: 0.02]")
+      ->check(CLI::Range(0.0, 1.0));
+  command->add_option("--max-cut", o->max_cut, "lightcuts: most clusters in a cut [default: 1000]")->check(CLI::Range(1, 1 << 24));
+  const std::map<std::string, VisibilityBounds> bounds{{"none", VisibilityBounds::none},
+                                                       {"lower", VisibilityBounds::lower},
+                                                       {"upper", VisibilityBounds::upper},
+                                                       {"both", VisibilityBounds::both}};
+  command
+      ->add_option("--visibility-bounds", o->visibility_bounds,
+                   "lightcuts: prove clusters with the scene's proxies: lower (the shaft from the point to the cluster's "
+                   "box misses every other instance's outside proxy and the own mesh: visibility 1), upper (every segment "
+                   "to the box enters an inside proxy: visibility 0), both, or none. Proved clusters take no shadow ray; "
+                   "their error bounds shrink [default: none]")
+      ->transform(CLI::CheckedTransformer(bounds, CLI::ignore_case));
+  command->add_flag("--check-proofs", o->check_proofs,
+                    "lightcuts: also trace the representative of every proved cluster and report how many disagreed with the "
+                    "proof (proof_disagreements in the stats; expected 0)");
   command->add_option("--bounces", o->bounces, "vpl: diffuse hits per light path that leave a VPL (B) [default: 1]")->check(CLI::Range(1, 64));
   command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, apart from --seed so that a reference can share the VPLs [default: 1]");
   command->add_option("--vpl-clamp", o->vpl_clamp,
@@ -151,9 +183,14 @@ void add_render_command(CLI::App& app, int& exit_code) {
                     "primitive tests (deterministic cost; slower than Embree's traversal)");
   command->add_flag("--maps", o->maps, "Also write OUT.cost.png (per camera sample: traversal steps + primitive tests with --count, else segment queries; "
                     "white = the most) and, for stochastic, OUT.p1.png (the chance a shadow ray traces the proxy alone: p1 of eq. 8, "
-                    "1 - q of the control variate; white = 1)");
+                    "1 - q of the control variate; white = 1); for lightcuts OUT.cut.pfm and OUT.cut.png (mean clusters per cut; "
+                    "white = the largest mean)");
+  command->add_option("--cut-reference", o->cut_reference,
+                      "lightcuts with --maps: a cut map (OUT.cut.pfm) of another run, e.g. without bounds; writes "
+                      "OUT.cut-reduction.png, per pixel 1 - this cut / that cut (white = the whole cut saved, black = none "
+                      "or larger)");
 
-  command->callback([o, &exit_code] {
+  command->callback([o, vpls_option, &exit_code] {
     if (o->probabilities == ProbabilityMode::learned && o->estimator != StochasticEstimator::control_variate)
       throw CLI::ValidationError("--probabilities", "learned needs --estimator control-variate");
     if (!is_linear_image_path(o->output))
@@ -176,10 +213,20 @@ void add_render_command(CLI::App& app, int& exit_code) {
                 << (holds ? std::string("holds") : "does not hold (" + std::string(counterexample) + "): used as a general proxy")
                 << "\n";
     };
-    const std::vector<MeshProxies> proxies = o->visibility == VisibilityMode::exact
+    const bool cluster_bounds = o->integrator == IntegratorKind::lightcuts && o->visibility_bounds != VisibilityBounds::none;
+    if (!o->cut_reference.empty() && (o->integrator != IntegratorKind::lightcuts || !o->maps))
+      throw CLI::ValidationError("--cut-reference", "needs --integrator lightcuts and --maps");
+    // Read before rendering, so that a bad reference fails at once.
+    std::optional<Image> cut_reference;
+    if (!o->cut_reference.empty()) cut_reference = read_linear_image(o->cut_reference);
+    const std::vector<MeshProxies> proxies = o->visibility == VisibilityMode::exact && !cluster_bounds
                                                  ? std::vector<MeshProxies>(scene.instances.size())
                                                  : prepare_scene_proxies(scene, proxy_options);
-    const RenderWorld world(scene, proxies, {.counting = o->count});
+    const RenderWorld world(scene, proxies, {.counting = o->count, .ray_masks = true, .keep_solids = cluster_bounds});
+    if (cut_reference && (cut_reference->width != scene.camera.width || cut_reference->height != scene.camera.height))
+      throw InvalidInputError(o->cut_reference, "the cut map is " + std::to_string(cut_reference->width) + "x" +
+                                                    std::to_string(cut_reference->height) + ", the image " +
+                                                    std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height));
     for (const std::string& note : world.notes()) std::cerr << "visproxy render: note: " << note << "\n";
     if (o->correction_scale == 0) o->correction_scale = o->integrator == IntegratorKind::vpl ? 0.25 : 2.0;
     RenderOptions options{.integrator = o->integrator,
@@ -199,6 +246,9 @@ void add_render_command(CLI::App& app, int& exit_code) {
                           .bounces = o->bounces,
                           .vpl_seed = o->vpl_seed,
                           .vpl_clamp = o->vpl_clamp,
+                          .light_points = o->light_points,
+                          .lightcut_vpls = vpls_option->count() > 0,
+                          .lightcut = {.error = o->error, .max_cut = o->max_cut, .bounds = o->visibility_bounds, .check_proofs = o->check_proofs},
                           .virtual_point_lights = nullptr,
                           .group_connections = !o->single_rays,
                           .self_shadow = o->self_shadow,
@@ -229,6 +279,20 @@ void add_render_command(CLI::App& app, int& exit_code) {
       for (const Color& c : result.cost_map.pixels) most = std::max(most, c.x());
       write_png(beside(o->output, ".cost.png"), result.cost_map, most > 0 ? 1.0 / most : 1.0);
       if (!result.p1_map.pixels.empty()) write_png(beside(o->output, ".p1.png"), result.p1_map, 1.0);
+      if (!result.cut_map.pixels.empty()) {
+        double largest = 0;
+        for (const Color& c : result.cut_map.pixels) largest = std::max(largest, c.x());
+        write_linear_image(beside(o->output, ".cut.pfm"), result.cut_map);
+        write_png(beside(o->output, ".cut.png"), result.cut_map, largest > 0 ? 1.0 / largest : 1.0);
+        if (cut_reference) {
+          Image reduction(scene.camera.width, scene.camera.height);
+          for (std::size_t i = 0; i < reduction.pixels.size(); ++i) {
+            const double before = cut_reference->pixels[i].x(), now = result.cut_map.pixels[i].x();
+            reduction.pixels[i] = Color::Constant(before > 0 ? std::clamp(1 - now / before, 0.0, 1.0) : 0.0);
+          }
+          write_png(beside(o->output, ".cut-reduction.png"), reduction, 1.0);
+        }
+      }
     }
     nlohmann::json instances = nlohmann::json::array();
     for (std::size_t i = 0; i < scene.instances.size(); ++i)
@@ -257,12 +321,26 @@ void add_render_command(CLI::App& app, int& exit_code) {
         {"shadow_rays_per_sample", o->shadow_rays},
         {"seed", o->seed},
         {"seconds_budget", o->seconds},
+        {"visibility_bounds", o->integrator == IntegratorKind::lightcuts ? nlohmann::json(visibility_bounds_name(o->visibility_bounds)) : nlohmann::json(nullptr)},
         {"instances", instances},
         {"proxy_notes", world.notes()},
         {"stats", result.stats.to_json()}};
     write_file_atomically(stats, document.dump(2) + "\n");
     const double segments = static_cast<double>(std::max<std::uint64_t>(result.stats.shadow_rays + result.stats.vpl_connections, 1));
     std::string vpl_text;
+    if (o->integrator == IntegratorKind::lightcuts) {
+      const nlohmann::json& lc = result.stats.integrator;
+      char text[400];
+      std::snprintf(text, sizeof text,
+                    ", %llu point lights, error %.3g, max cut %d, bounds %s: mean cut %.1f clusters, %.1f shadow rays per "
+                    "shading point, clusters proved unoccluded %llu and occluded %llu",
+                    static_cast<unsigned long long>(lc.value("point_lights", 0ull)), o->error, o->max_cut,
+                    std::string(visibility_bounds_name(o->visibility_bounds)).c_str(), lc.value("cut_size_mean", 0.0),
+                    lc.value("shadow_rays_per_shading_point", 0.0), static_cast<unsigned long long>(lc.value("clusters_proved_unoccluded", 0ull)),
+                    static_cast<unsigned long long>(lc.value("clusters_proved_occluded", 0ull)));
+      vpl_text = text;
+      if (o->check_proofs) vpl_text += ", proofs checked: " + std::to_string(lc.value("proof_disagreements", 0ull)) + " disagreed";
+    }
     if (o->integrator == IntegratorKind::vpl) {
       char text[200];
       std::snprintf(text, sizeof text, ", %llu VPLs (%llu connections; clamping dropped %.3f %% of their energy)",

@@ -174,6 +174,8 @@ struct RenderWorld::Impl {
     }
   };
   std::vector<ConvexShell> shells;
+  bool keep_solids = false;
+  std::vector<InstanceSolids> solids;  // per instance, when keep_solids
   static std::optional<ConvexShell> convex_shell(const TriangleMesh& mesh, const Eigen::Affine3d& transform);
   int packet = 1;  // width of the packets grouped queries use
 
@@ -464,6 +466,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     : impl_(std::make_unique<Impl>()) {
   Impl& w = *impl_;
   w.counting = options.counting;
+  w.keep_solids = options.keep_solids;
   w.masks = options.ray_masks && rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED) != 0;
   w.packet = rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED) != 0   ? 8
              : rtcGetDeviceProperty(w.device.get(), RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED) != 0 ? 4
@@ -604,11 +607,27 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     // Outside (bounds): a usable outside proxy, else the mesh itself (a clipped solid when
     // it is closed and convex, which holds it).
     bool outside_added = false;
+    InstanceSolids solids;
+    if (w.keep_solids) {
+      solids.pad = pad_world;
+      solids.mesh = transformed_mesh(mesh.mesh, instance.transform);
+    }
+    auto keep_planes = [&](const ConvexPolytope& local) {
+      const ConvexPolytope world_polytope = local.transformed(instance.transform);
+      for (const ConvexPolytope::Plane& plane : world_polytope.planes())
+        solids.outside_planes.emplace_back(plane.normal, plane.offset);
+    };
     if (p.outside) {
       const PreparedProxy& prepared = prepared_for(instance.mesh, *p.outside);
       if (prepared.kind == ProxyKind::outside && traced_outside_usable(prepared)) {
         add_proxy(w.outside, prepared);
         outside_added = true;
+        if (w.keep_solids) {
+          solids.outside = transformed_mesh(prepared.mesh, instance.transform);
+          solids.outside_is_mesh = false;
+          if (prepared.polytope) keep_planes(*prepared.polytope);
+          else solids.lights_outside_outside = true;
+        }
       } else if (prepared.kind == ProxyKind::outside) {
         w.note(instance_name + ": a light lies inside (or within rounding of) its outside proxy " + prepared.spec +
                ": bounds traces the mesh instead");
@@ -621,6 +640,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
         w.convex[w.outside].push_back({id, it->second->transformed(instance.transform).grown(pad_world)});
       else
         w.add_instance(w.outside, mesh_scene(instance.mesh), object_to_world, id, mask);
+      if (w.keep_solids) {
+        solids.outside = solids.mesh;
+        if (it->second) keep_planes(*it->second);
+      }
     }
 
     // Inside (bounds): only a usable one; traced (balls are solids), never clipped.
@@ -629,12 +652,17 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       if (prepared.kind == ProxyKind::inside && inside_usable() && (!prepared.spheres.empty() || !prepared.mesh.triangles.empty())) {
         w.add_instance(w.inside, proxy_scene(instance.mesh, prepared), object_to_world, id, mask);
         w.has_inside = true;
+        if (w.keep_solids) {
+          for (const Sphere& ball : prepared.spheres) solids.inside_spheres.push_back({instance.transform * ball.center, ball.radius * scales(2)});
+          if (prepared.spheres.empty()) solids.inside = transformed_mesh(prepared.mesh, instance.transform);
+        }
       } else if (prepared.kind == ProxyKind::inside) {
         w.note(instance_name + ": a light lies inside (or within rounding of) the mesh's solid, so its inside proxy " +
                prepared.spec + " proves nothing: bounds does not use it");
       }
     }
 
+    if (w.keep_solids) w.solids.push_back(std::move(solids));
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
     auto sides = w.mesh_sides.find(instance.mesh);
     if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(mesh.mesh)).first;
@@ -765,6 +793,12 @@ TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }
 
 bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
+
+bool RenderWorld::keeps_solids() const { return impl_->keep_solids; }
+const InstanceSolids& RenderWorld::instance_solids(std::size_t instance) const {
+  if (!impl_->keep_solids) throw Error("RenderWorld::instance_solids: the world was made without keep_solids");
+  return impl_->solids.at(instance);
+}
 
 const std::vector<std::string>& RenderWorld::notes() const { return impl_->notes; }
 

@@ -77,6 +77,33 @@ struct RenderWorldOptions {
   /// Use Embree's ray masks to skip instances, when the device supports them (Debian's
   /// Embree does); otherwise, or with false, a filter function decides every hit.
   bool ray_masks = true;
+  /// Keep each instance's geometry in world space for proofs about whole shafts and cones
+  /// (instance_solids(): lightcuts' cluster bounds). Off by default: it copies every mesh.
+  bool keep_solids = false;
+};
+
+/// What proofs about a shaft or a cone of segments (rather than one segment) may use of an
+/// instance, in world space, after the same checks the segment proofs make. Every
+/// separation or crossing proved against these must hold by `pad`, the instance's bound on
+/// Embree's float rounding, so that the proof also holds for the rays Embree traces.
+struct InstanceSolids {
+  double pad = 0;      ///< world units
+  TriangleMesh mesh;   ///< the instance's own triangles
+  /// Triangles whose solid holds the mesh: its outside proxy (proved, and usable by bounds)
+  /// or the mesh itself (`outside_is_mesh`). A shaft that meets none of them misses the
+  /// mesh only if the shaft holds a point outside that solid: a convex solid (`outside_planes`
+  /// not empty: its face planes, outward unit normals) shows it by a plane, a traced proxy
+  /// by a point on a light (`lights_outside_outside`: every light lies outside its solid).
+  TriangleMesh outside;
+  bool outside_is_mesh = true;
+  std::vector<std::pair<Vertex, double>> outside_planes;
+  bool lights_outside_outside = false;
+  /// Proved inside proxies, usable because every light lies outside the mesh's solid: balls
+  /// (shrunk by the rounding bound, radius scaled by the transform's least stretch) and
+  /// triangles (kept clear of the mesh by the rounding bound). A segment from a point on a
+  /// light that enters one is blocked by the mesh.
+  std::vector<Sphere> inside_spheres;
+  TriangleMesh inside;
 };
 
 /// The scene as shadow and camera rays see it, with every proof the visibility modes rely
@@ -165,6 +192,11 @@ class RenderWorld {
   /// kOccluderClusterSize and kOccluderClusterGroup), each with a ball holding them:
   /// occluder disks reject a cluster's balls at once for segments outside its bound's cone.
   const std::vector<SphereCluster>& occluder_clusters(std::size_t instance) const;
+
+  /// The instance's geometry for shaft and cone proofs (RenderWorldOptions::keep_solids; Error
+  /// otherwise).
+  const InstanceSolids& instance_solids(std::size_t instance) const;
+  bool keeps_solids() const;
 
   /// Whether any instance has a usable inside proxy (else inside_blocks is always false).
   bool has_inside_proxies() const;

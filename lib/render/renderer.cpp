@@ -59,7 +59,24 @@ std::string_view visibility_mode_name(VisibilityMode mode) {
   return "exact";
 }
 
-std::string_view integrator_name(IntegratorKind integrator) { return integrator == IntegratorKind::vpl ? "vpl" : "direct"; }
+std::string_view integrator_name(IntegratorKind integrator) {
+  switch (integrator) {
+    case IntegratorKind::direct: return "direct";
+    case IntegratorKind::vpl: return "vpl";
+    case IntegratorKind::lightcuts: return "lightcuts";
+  }
+  return "direct";
+}
+
+std::string_view visibility_bounds_name(VisibilityBounds bounds) {
+  switch (bounds) {
+    case VisibilityBounds::none: return "none";
+    case VisibilityBounds::lower: return "lower";
+    case VisibilityBounds::upper: return "upper";
+    case VisibilityBounds::both: return "both";
+  }
+  return "none";
+}
 
 std::string_view self_shadow_name(SelfShadow self_shadow) {
   switch (self_shadow) {
@@ -79,7 +96,14 @@ void validate(const RenderOptions& options) {
   if (!(options.probability_floor >= 0 && options.probability_floor <= 1.0 / 3))
     fail("probability_floor must lie in [0, 1/3]");
   if (!(options.correction_scale > 0) || !std::isfinite(options.correction_scale)) fail("correction_scale must be positive");
-  if (options.integrator == IntegratorKind::vpl) {
+  if (options.integrator == IntegratorKind::lightcuts) {
+    if (options.visibility != VisibilityMode::exact)
+      fail("lightcuts traces its representatives exactly: use visibility exact (its proofs are the visibility bounds)");
+    if (options.light_points < 1) fail("light_points must be at least 1, not " + std::to_string(options.light_points));
+    if (!(options.lightcut.error >= 0) || !std::isfinite(options.lightcut.error)) fail("the lightcut error must be a finite number, 0 or more");
+    if (options.lightcut.max_cut < 1) fail("max_cut must be at least 1, not " + std::to_string(options.lightcut.max_cut));
+  }
+  if (options.integrator == IntegratorKind::vpl || (options.integrator == IntegratorKind::lightcuts && options.lightcut_vpls)) {
     if (!options.virtual_point_lights && options.vpls < 1) fail("vpls (light paths) must be at least 1, not " + std::to_string(options.vpls));
     if (options.bounces < 1) fail("bounces must be at least 1, not " + std::to_string(options.bounces));
     if (!(options.vpl_clamp >= 0) || !std::isfinite(options.vpl_clamp)) fail("vpl_clamp must be a finite number, 0 or more");
@@ -161,8 +185,9 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 
   const std::unique_ptr<Visibility> visibility = make_visibility({scene, world, options, lights, pixels});
   const IntegratorContext integrator_context{scene, world, options, lights};
-  const std::unique_ptr<Integrator> integrator = options.integrator == IntegratorKind::vpl
-                                                     ? make_vpl_integrator(integrator_context)
+  const std::unique_ptr<Integrator> integrator = options.integrator == IntegratorKind::vpl ? make_vpl_integrator(integrator_context)
+                                                 : options.integrator == IntegratorKind::lightcuts
+                                                     ? make_lightcuts_integrator(integrator_context)
                                                      : make_direct_integrator(integrator_context);
   // The VPL integrator shades with its VPLs even where no area light is left.
   const bool needs_lights = options.integrator == IntegratorKind::direct;
@@ -257,6 +282,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     r.shafts_culled += s.shafts_culled;
     r.vpl_connections += s.vpl_connections, r.disk_tests += s.disk_tests;
   }
+  integrator->fill_maps(result, std::max(passes, 1));
   result.stats.integrator = integrator->describe();
   result.stats.passes = passes;
   result.stats.counted = counting;

@@ -12,6 +12,7 @@
 
 #include "visproxy/estimator/probabilities.h"
 #include "visproxy/render/image.h"
+#include "visproxy/render/lightcuts.h"
 #include "visproxy/render/render_world.h"
 #include "visproxy/render/virtual_point_lights.h"
 
@@ -20,9 +21,12 @@ namespace visproxy {
 /// spheres: each instance's sphere-set proxy as occluder disks (occluding-spheres paper §2,
 /// biased by design); instances without one are traced exactly.
 enum class VisibilityMode { exact, stochastic, bounds, spheres };
-/// direct: M area-light samples per camera sample; vpl: those plus every virtual point light.
-enum class IntegratorKind { direct, vpl };
+/// direct: M area-light samples per camera sample; vpl: those plus every virtual point light;
+/// lightcuts: K point lights per area light (and the VPLs, if asked) shaded through a
+/// lightcut (render/lightcuts.h).
+enum class IntegratorKind { direct, vpl, lightcuts };
 std::string_view integrator_name(IntegratorKind integrator);
+std::string_view visibility_bounds_name(VisibilityBounds bounds);
 /// spheres: how the shading point's own instance shadows it (occluding-spheres §4.2).
 /// heuristic: its spheres count except those closer than twice their radius (t < 2R);
 /// exact: its mesh is traced and its spheres are left out; none: all its spheres count.
@@ -63,6 +67,12 @@ struct RenderOptions {
   /// diagonal of the scene's bounds: the energy of connections shorter than about
   /// vpl_clamp x D is dropped (RenderStats::integrator: clamped_energy_fraction). 0: no clamp.
   double vpl_clamp = 0.05;
+  // lightcuts integrator
+  int light_points = 1024;         ///< K: point lights per area light
+  bool lightcut_vpls = false;      ///< also the VPLs of `vpls` light paths (clamped as the vpl integrator's)
+  /// The cut: error fraction, largest cut, visibility bounds (need a world made with
+  /// keep_solids), and the proofs' self-check (CutOptions).
+  CutOptions lightcut;
   /// Use these VPLs instead of tracing light paths (a renderer's own, or a test's).
   const std::vector<VirtualPointLight>* virtual_point_lights = nullptr;
   /// Connections from a shading point to its VPLs traced as groups of rays from one origin
@@ -115,6 +125,8 @@ struct RenderResult {
   /// Stochastic only (else empty), grey: per pixel the mean probability that a shadow ray
   /// traces the proxy alone (eq. 8: p1; control variate: 1 - q of the proxy's answer).
   Image p1_map;
+  /// lightcuts only (else empty), grey: per pixel the mean number of clusters in the cut.
+  Image cut_map;
   Image cost_map;  ///< per pixel per camera sample: traversal steps + primitive tests when counted, else segment queries
   RenderStats stats;
 };

@@ -44,6 +44,18 @@ std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, co
   return lights;
 }
 
+double scene_diagonal(const Scene& scene, const RenderWorld& world) {
+  BoundingBox box;
+  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    const BoundingBox& b = world.instance_bounds(i);
+    if (!b.empty()) box.extend(b.min), box.extend(b.max);
+  }
+  for (const AreaLight& light : scene.lights)
+    for (const auto& t : light.triangles)
+      for (const Vertex& p : t) box.extend(p);
+  return box.empty() ? 0 : (box.max - box.min).norm();
+}
+
 VplGeometry vpl_geometry(const Vertex& x, const Vertex& n, const VirtualPointLight& light) {
   // cos_x cos_v / d^2 = (n . w) (-n_v . w) / d^4: no square root.
   // Written out as in vpl_geometry_soa below, so that both forms round alike.

@@ -39,6 +39,10 @@ struct VplOptions {
 /// stream (seed, i): the lights do not depend on the number of threads.
 std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, const RenderWorld& world, const VplOptions& options);
 
+/// The diagonal of the box holding every instance (as RenderWorld bounds it) and every
+/// light: the length VPL clamps are relative to. World units.
+double scene_diagonal(const Scene& scene, const RenderWorld& world);
+
 /// The geometric term cos_x cos_v / d^2 of a connection from x (unit normal n) to `light`,
 /// and whether the connection faces both surfaces. G is at most `max_geometric` when it is
 /// clamped (the energy above it is dropped).

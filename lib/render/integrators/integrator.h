@@ -18,6 +18,12 @@ class Integrator {
   /// One line per fact a reader of the image needs (the VPLs made, the energy clamped), for
   /// the stats.
   virtual nlohmann::json describe() const { return nlohmann::json::object(); }
+  /// Fills the integrator's own maps in `result` (lightcuts: the cut sizes), `passes` camera
+  /// samples per pixel.
+  virtual void fill_maps(RenderResult& result, int passes) const {
+    (void)result;
+    (void)passes;
+  }
 };
 
 struct IntegratorContext {
@@ -36,5 +42,7 @@ Color direct_light(const IntegratorContext& context, const ShadingPoint& point, 
 std::unique_ptr<Integrator> make_direct_integrator(const IntegratorContext& context);
 /// Instant radiosity: M light samples plus every virtual point light.
 std::unique_ptr<Integrator> make_vpl_integrator(const IntegratorContext& context);
+/// Lightcuts over K points per area light (and the VPLs), with optional visibility bounds.
+std::unique_ptr<Integrator> make_lightcuts_integrator(const IntegratorContext& context);
 
 }  // namespace visproxy

@@ -71,15 +71,7 @@ class VplIntegrator final : public Integrator {
       ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal, light.distance));
       end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
     }
-    BoundingBox box;
-    for (std::size_t i = 0; i < context.scene.instances.size(); ++i) {
-      const BoundingBox& b = context.world.instance_bounds(i);
-      if (!b.empty()) box.extend(b.min), box.extend(b.max);
-    }
-    for (const AreaLight& light : context.scene.lights)
-      for (const auto& t : light.triangles)
-        for (const Vertex& p : t) box.extend(p);
-    diagonal_ = box.empty() ? 0 : (box.max - box.min).norm();
+    diagonal_ = scene_diagonal(context.scene, context.world);
     clamp_distance_ = options.vpl_clamp * diagonal_;
     max_geometric_ = clamp_distance_ > 0 ? 1 / (clamp_distance_ * clamp_distance_) : std::numeric_limits<double>::infinity();
     const std::size_t pixels = static_cast<std::size_t>(context.scene.camera.width) * static_cast<std::size_t>(context.scene.camera.height);

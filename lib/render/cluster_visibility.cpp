@@ -1,0 +1,315 @@
+#include "visproxy/render/cluster_visibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "visproxy/core/errors.h"
+
+namespace visproxy {
+namespace {
+
+Vertex corner(const BoundingBox& box, int k) {
+  return Vertex(k & 1 ? box.max.x() : box.min.x(), k & 2 ? box.max.y() : box.min.y(), k & 4 ? box.max.z() : box.min.z());
+}
+
+// The least of n . q over the box.
+double box_min(const Vertex& n, const BoundingBox& box) {
+  double s = 0;
+  for (int i = 0; i < 3; ++i) s += std::min(n[i] * box.min[i], n[i] * box.max[i]);
+  return s;
+}
+
+}  // namespace
+
+Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
+  points_[0] = apex;
+  for (int k = 0; k < 8; ++k) points_[static_cast<std::size_t>(k) + 1] = corner(box, k);
+  for (const Vertex& p : points_) hull_box_.extend(p);
+  auto add = [&](const Vertex& n) {
+    double offset = -std::numeric_limits<double>::infinity();
+    for (const Vertex& p : points_) offset = std::max(offset, n.dot(p));
+    planes_.emplace_back(n, offset);
+  };
+  for (int axis = 0; axis < 3; ++axis) add(Vertex::Unit(axis)), add(-Vertex::Unit(axis));
+  // Planes through the apex and an edge of the box that have every corner on one side:
+  // the hull's side faces. The offset is taken over all nine points, so that a plane kept
+  // on a rounded side test still supports the hull.
+  const double scale = (hull_box_.max - hull_box_.min).norm();
+  for (int k = 0; k < 8; ++k)
+    for (int bit = 1; bit < 8; bit <<= 1) {
+      if (k & bit) continue;
+      const Vertex& c0 = points_[static_cast<std::size_t>(k) + 1];
+      const Vertex& c1 = points_[static_cast<std::size_t>(k | bit) + 1];
+      const Vertex edge = c1 - c0;
+      Vertex n = edge.cross(c0 - apex);
+      const double length = n.norm();
+      if (!(length > 1e-12 * edge.norm() * (c0 - apex).norm()) || edge.norm() == 0) continue;
+      n /= length;
+      double lo = 0, hi = 0;
+      for (int j = 0; j < 8; ++j) {
+        const double s = n.dot(points_[static_cast<std::size_t>(j) + 1] - apex);
+        lo = std::min(lo, s), hi = std::max(hi, s);
+      }
+      const double tolerance = 1e-12 * scale;
+      if (hi <= tolerance) add(n);
+      else if (lo >= -tolerance) add(-n);
+    }
+}
+
+bool Shaft::separated_from(const BoundingBox& box, double margin) const {
+  if (box.empty()) return true;
+  for (const auto& [n, offset] : planes_)
+    if (box_min(n, box) - offset > margin) return true;
+  return false;
+}
+
+bool Shaft::separated_from(const Vertex& a, const Vertex& b, const Vertex& c, double margin, double apex_margin) const {
+  for (const auto& [n, offset] : planes_)
+    if (std::min({n.dot(a), n.dot(b), n.dot(c)}) - offset > margin) return true;
+  Vertex m = (b - a).cross(c - a);
+  const double length = m.norm();
+  if (!(length > 0)) return false;
+  m /= length;
+  const double s0 = m.dot(points_[0] - a);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t k = 1; k < 9; ++k) {
+    const double s = m.dot(points_[k] - a);
+    lo = std::min(lo, s), hi = std::max(hi, s);
+  }
+  return (s0 > apex_margin && lo > margin) || (s0 < -apex_margin && hi < -margin);
+}
+
+bool Shaft::separated_from(const Sphere& ball, double margin) const {
+  for (const auto& [n, offset] : planes_)
+    if (n.dot(ball.center) - ball.radius - offset > margin) return true;
+  return false;
+}
+
+bool ball_blocks_box(const Vertex& apex, const Sphere& ball, const BoundingBox& box, double margin) {
+  if (box.empty()) return false;
+  const double r = ball.radius - margin;
+  const Vertex axis_vector = ball.center - apex;
+  const double t = axis_vector.norm();
+  if (!(r > 0) || !(t > r)) return false;
+  const Vertex axis = axis_vector / t;
+  const double tangent = std::sqrt((t - r) * (t + r)), cos_gamma = tangent / t;
+  // Every point of the box beyond the tangent length (plus the margin) ...
+  const Vertex nearest = apex.cwiseMax(box.min).cwiseMin(box.max);
+  if (!((nearest - apex).norm() > tangent + margin)) return false;
+  // ... and inside the cone.
+  for (int k = 0; k < 8; ++k) {
+    const Vertex v = corner(box, k) - apex;
+    if (!(axis.dot(v) > v.norm() * cos_gamma)) return false;
+  }
+  return true;
+}
+
+bool triangle_blocks_box(const Vertex& apex, const Vertex& a, const Vertex& b, const Vertex& c, const BoundingBox& box,
+                         double margin) {
+  if (box.empty()) return false;
+  Vertex n = (b - a).cross(c - a);
+  const double length = n.norm();
+  if (!(length > 0)) return false;
+  n /= length;
+  double s_apex = n.dot(apex - a);
+  if (s_apex < 0) n = -n, s_apex = -s_apex;
+  if (!(s_apex > 0)) return false;
+  std::array<Vertex, 8> corners;
+  std::array<double, 8> along;  // of the segment from the apex to each corner, where it crosses the plane
+  for (int k = 0; k < 8; ++k) {
+    corners[static_cast<std::size_t>(k)] = corner(box, k);
+    const double depth = -n.dot(corners[static_cast<std::size_t>(k)] - a);
+    if (!(depth > margin)) return false;
+    along[static_cast<std::size_t>(k)] = s_apex / (s_apex + depth);
+  }
+  const std::array<Vertex, 3> v{a, b, c};
+  for (int e = 0; e < 3; ++e) {
+    const Vertex& p = v[static_cast<std::size_t>(e)];
+    const Vertex& q = v[static_cast<std::size_t>((e + 1) % 3)];
+    const Vertex& o = v[static_cast<std::size_t>((e + 2) % 3)];
+    Vertex m = (p - apex).cross(q - apex);
+    const double m_length = m.norm();
+    if (!(m_length > 0)) return false;
+    m /= m_length;
+    if (m.dot(o - apex) < 0) m = -m;
+    // The crossing point apex + s (y - apex) lies s m.(y - apex) inside this edge's plane.
+    for (std::size_t k = 0; k < 8; ++k)
+      if (!(along[k] * m.dot(corners[k] - apex) > margin)) return false;
+  }
+  return true;
+}
+
+TriangleTree::TriangleTree(const TriangleMesh& mesh) {
+  for (const Triangle& t : mesh.triangles) triangles_.push_back({mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]});
+  if (triangles_.empty()) return;
+  std::vector<std::uint32_t> order(triangles_.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::vector<Vertex> centroids;
+  for (const auto& t : triangles_) centroids.push_back((t[0] + t[1] + t[2]) / 3);
+  struct Task {
+    std::uint32_t node, begin, end;
+  };
+  nodes_.push_back({});
+  std::vector<Task> stack{{0, 0, static_cast<std::uint32_t>(order.size())}};
+  while (!stack.empty()) {
+    const Task task = stack.back();
+    stack.pop_back();
+    BoundingBox box, centres;
+    for (std::uint32_t i = task.begin; i < task.end; ++i) {
+      for (const Vertex& p : triangles_[order[i]]) box.extend(p);
+      centres.extend(centroids[order[i]]);
+    }
+    nodes_[task.node].box = box;
+    if (task.end - task.begin <= 4) {
+      nodes_[task.node].first = task.begin, nodes_[task.node].count = task.end - task.begin;
+      continue;
+    }
+    int axis = 0;
+    (centres.max - centres.min).maxCoeff(&axis);
+    const std::uint32_t middle = task.begin + (task.end - task.begin) / 2;
+    std::nth_element(order.begin() + task.begin, order.begin() + middle, order.begin() + task.end,
+                     [&](std::uint32_t l, std::uint32_t r) { return centroids[l][axis] < centroids[r][axis]; });
+    const auto child = static_cast<std::uint32_t>(nodes_.size());
+    nodes_[task.node].first = child, nodes_[task.node].count = 0;
+    nodes_.push_back({}), nodes_.push_back({});
+    stack.push_back({child, task.begin, middle});
+    stack.push_back({child + 1, middle, task.end});
+  }
+  std::vector<std::array<Vertex, 3>> sorted;
+  sorted.reserve(triangles_.size());
+  for (const std::uint32_t i : order) sorted.push_back(triangles_[i]);
+  triangles_ = std::move(sorted);
+}
+
+bool TriangleTree::shaft_misses(const Shaft& shaft, double margin, double apex_margin) const {
+  if (nodes_.empty()) return true;
+  std::uint32_t stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (shaft.separated_from(node.box, margin)) continue;
+    if (node.count > 0) {
+      for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const auto& t = triangles_[i];
+        if (!shaft.separated_from(t[0], t[1], t[2], margin, apex_margin)) return false;
+      }
+      continue;
+    }
+    if (top + 2 > 128) return false;  // deeper than any balanced tree of 2^64 triangles: refuse, not guess
+    stack[top++] = node.first, stack[top++] = node.first + 1;
+  }
+  return true;
+}
+
+ClusterProofs::ClusterProofs(const RenderWorld& world, std::size_t instances) : world_(&world), instances_(instances) {
+  if (!world.keeps_solids()) throw Error("lightcuts: visibility bounds need a render world made with keep_solids");
+  for (std::size_t i = 0; i < instances; ++i) {
+    const InstanceSolids& solids = world.instance_solids(i);
+    mesh_trees_.emplace_back(solids.mesh);
+    outside_trees_.push_back(solids.outside_is_mesh ? TriangleTree() : TriangleTree(solids.outside));
+  }
+}
+
+void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double offset, const BoundingBox& lights) {
+  const RenderWorld& world = *proofs_->world_;
+  x_ = x;
+  hit_ = &hit;
+  // The point lies `offset` off its surface, up to Embree's rounding of the hit distance
+  // (an eighth of the offset at most): a quarter of it is kept from the own triangles' planes.
+  apex_margin_ = offset / 4;
+  x_shells_ = world.convex_shells_holding(x);
+  near_.clear(), x_outside_.assign(proofs_->instances_, false), balls_.clear(), faces_.clear();
+  last_ball_ = last_face_ = -1;
+  const Shaft all(x, lights);
+  for (std::size_t i = 0; i < proofs_->instances_; ++i) {
+    if (static_cast<int>(i) != hit.instance && all.separated_from(world.instance_bounds(i), 0.0)) continue;
+    near_.push_back(i);
+    const InstanceSolids& solids = world.instance_solids(i);
+    for (const auto& [n, d] : solids.outside_planes)
+      if (n.dot(x) - d > solids.pad) x_outside_[i] = true;
+    for (const Sphere& ball : solids.inside_spheres)
+      if ((ball.center - x).norm() > ball.radius + solids.pad && !all.separated_from(ball, 0.0)) balls_.emplace_back(ball, solids.pad);
+    for (const Triangle& t : solids.inside.triangles) {
+      const Vertex& a = solids.inside.positions[t[0]];
+      const Vertex& b = solids.inside.positions[t[1]];
+      const Vertex& c = solids.inside.positions[t[2]];
+      if (!all.separated_from(a, b, c, 0.0, 0.0)) faces_.push_back({{a, b, c}, solids.pad});
+    }
+  }
+  // The largest as seen from the point first; at most 64 of each are tried per cluster.
+  auto ball_size = [&](const std::pair<Sphere, double>& b) { return b.first.radius / (b.first.center - x).norm(); };
+  std::sort(balls_.begin(), balls_.end(), [&](const auto& l, const auto& r) { return ball_size(l) > ball_size(r); });
+  if (balls_.size() > 64) balls_.resize(64);
+  auto face_size = [&](const Face& f) {
+    const Vertex centre = (f.corners[0] + f.corners[1] + f.corners[2]) / 3;
+    return (f.corners[1] - f.corners[0]).cross(f.corners[2] - f.corners[0]).norm() / std::max((centre - x).squaredNorm(), 1e-300);
+  };
+  std::sort(faces_.begin(), faces_.end(), [&](const Face& l, const Face& r) { return face_size(l) > face_size(r); });
+  if (faces_.size() > 64) faces_.resize(64);
+}
+
+bool ClusterProofs::Point::instance_clear(std::size_t i, const Shaft& shaft, bool on_lights) const {
+  const InstanceSolids& solids = proofs_->world_->instance_solids(i);
+  if (static_cast<int>(i) == hit_->instance) {
+    // The own mesh behind the tangent plane, the box in front of it.
+    if (hit_->own_mesh_behind) {
+      bool front = true;
+      for (std::size_t k = 1; k < 9 && front; ++k) front = hit_->normal.dot(shaft.points()[k] - hit_->position) > solids.pad;
+      if (front) return true;
+    }
+    return proofs_->mesh_trees_[i].shaft_misses(shaft, solids.pad, apex_margin_);
+  }
+  // A convex outside solid beside the shaft: one of its planes has every point beyond it.
+  for (const auto& [n, d] : solids.outside_planes) {
+    bool beyond = true;
+    for (const Vertex& p : shaft.points())
+      if (!(n.dot(p) - d > solids.pad)) {
+        beyond = false;
+        break;
+      }
+    if (beyond) return true;
+  }
+  if (!solids.outside_is_mesh) {
+    // Missing every face of the solid proves the shaft outside it only with a point of the
+    // shaft known to lie outside.
+    const bool point_outside = x_outside_[i] || (on_lights && solids.lights_outside_outside);
+    if (point_outside && proofs_->outside_trees_[i].shaft_misses(shaft, solids.pad, solids.pad)) return true;
+  }
+  return proofs_->mesh_trees_[i].shaft_misses(shaft, solids.pad, solids.pad);
+}
+
+bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
+  const RenderWorld& world = *proofs_->world_;
+  const Shaft shaft(x_, box);
+  unsigned shells = x_shells_;
+  for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(corner(box, k));
+  for (const std::size_t i : near_) {
+    if (shells & instance_bit(i)) continue;
+    if (static_cast<int>(i) != hit_->instance && shaft.separated_from(world.instance_bounds(i), 0.0)) continue;
+    if (!instance_clear(i, shaft, on_lights)) return false;
+  }
+  return true;
+}
+
+bool ClusterProofs::Point::occluded(const BoundingBox& box, bool on_lights) {
+  if (!on_lights) return false;
+  auto ball = [&](int k) {
+    const auto& [sphere, pad] = balls_[static_cast<std::size_t>(k)];
+    return ball_blocks_box(x_, sphere, box, pad);
+  };
+  auto face = [&](int k) {
+    const Face& f = faces_[static_cast<std::size_t>(k)];
+    return triangle_blocks_box(x_, f.corners[0], f.corners[1], f.corners[2], box, f.pad);
+  };
+  if (last_ball_ >= 0 && ball(last_ball_)) return true;
+  if (last_face_ >= 0 && face(last_face_)) return true;
+  for (int k = 0; k < static_cast<int>(balls_.size()); ++k)
+    if (k != last_ball_ && ball(k)) return last_ball_ = k, true;
+  for (int k = 0; k < static_cast<int>(faces_.size()); ++k)
+    if (k != last_face_ && face(k)) return last_face_ = k, true;
+  return false;
+}
+
+}  // namespace visproxy
