@@ -72,7 +72,7 @@ struct RenderOptions {
   bool lightcut_vpls = false;      ///< also the VPLs of `vpls` light paths (clamped as the vpl integrator's)
   /// The cut: error fraction, largest cut, visibility bounds (need a world made with
   /// keep_solids), and the proofs' self-check (CutOptions).
-  CutOptions lightcut;
+  CutOptions lightcut = {};
   /// Use these VPLs instead of tracing light paths (a renderer's own, or a test's).
   const std::vector<VirtualPointLight>* virtual_point_lights = nullptr;
   /// Connections from a shading point to its VPLs traced as groups of rays from one origin
