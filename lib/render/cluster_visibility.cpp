@@ -7,11 +7,12 @@
 #include "visproxy/core/errors.h"
 
 namespace visproxy {
-namespace {
 
-Vertex corner(const BoundingBox& box, int k) {
+Vertex box_corner(const BoundingBox& box, int k) {
   return Vertex(k & 1 ? box.max.x() : box.min.x(), k & 2 ? box.max.y() : box.min.y(), k & 4 ? box.max.z() : box.min.z());
 }
+
+namespace {
 
 // The least of n . q over the box.
 double box_min(const Vertex& n, const BoundingBox& box) {
@@ -24,37 +25,42 @@ double box_min(const Vertex& n, const BoundingBox& box) {
 
 Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
   points_[0] = apex;
-  for (int k = 0; k < 8; ++k) points_[static_cast<std::size_t>(k) + 1] = corner(box, k);
+  for (int k = 0; k < 8; ++k) points_[static_cast<std::size_t>(k) + 1] = box_corner(box, k);
   for (const Vertex& p : points_) hull_box_.extend(p);
   auto add = [&](const Vertex& n) {
     double offset = -std::numeric_limits<double>::infinity();
     for (const Vertex& p : points_) offset = std::max(offset, n.dot(p));
     planes_.emplace_back(n, offset);
   };
-  for (int axis = 0; axis < 3; ++axis) add(Vertex::Unit(axis)), add(-Vertex::Unit(axis));
-  // Planes through the apex and an edge of the box that have every corner on one side:
-  // the hull's side faces. The offset is taken over all nine points, so that a plane kept
-  // on a rounded side test still supports the hull.
-  const double scale = (hull_box_.max - hull_box_.min).norm();
-  for (int k = 0; k < 8; ++k)
-    for (int bit = 1; bit < 8; bit <<= 1) {
-      if (k & bit) continue;
-      const Vertex& c0 = points_[static_cast<std::size_t>(k) + 1];
-      const Vertex& c1 = points_[static_cast<std::size_t>(k | bit) + 1];
-      const Vertex edge = c1 - c0;
-      Vertex n = edge.cross(c0 - apex);
-      const double length = n.norm();
-      if (!(length > 1e-12 * edge.norm() * (c0 - apex).norm()) || edge.norm() == 0) continue;
-      n /= length;
-      double lo = 0, hi = 0;
-      for (int j = 0; j < 8; ++j) {
-        const double s = n.dot(points_[static_cast<std::size_t>(j) + 1] - apex);
-        lo = std::min(lo, s), hi = std::max(hi, s);
+  for (int axis = 0; axis < 3; ++axis) {
+    planes_.emplace_back(Vertex::Unit(axis), hull_box_.max[axis]);
+    planes_.emplace_back(-Vertex::Unit(axis), -hull_box_.min[axis]);
+  }
+  // The hull's side faces: planes through the apex and each silhouette edge of the box, an
+  // edge between a face turned towards the apex and one turned away. The offset is taken
+  // over all nine points, so that the plane supports the hull whatever rounding did.
+  auto faces_apex = [&](int axis, int side) {
+    return side ? apex[axis] > box.max[axis] : apex[axis] < box.min[axis];
+  };
+  const Vertex centre = 0.5 * (box.min + box.max);
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    for (int sb = 0; sb < 2; ++sb)
+      for (int sc = 0; sc < 2; ++sc) {
+        if (faces_apex(b, sb) == faces_apex(c, sc)) continue;
+        Vertex c0, c1;
+        c0[b] = c1[b] = sb ? box.max[b] : box.min[b];
+        c0[c] = c1[c] = sc ? box.max[c] : box.min[c];
+        c0[a] = box.min[a], c1[a] = box.max[a];
+        const Vertex edge = c1 - c0;
+        Vertex n = edge.cross(c0 - apex);
+        const double length = n.norm();
+        if (!(length > 1e-12 * edge.norm() * (c0 - apex).norm()) || !(edge.norm() > 0)) continue;
+        n /= length;
+        if (n.dot(centre - apex) > 0) n = -n;
+        add(n);
       }
-      const double tolerance = 1e-12 * scale;
-      if (hi <= tolerance) add(n);
-      else if (lo >= -tolerance) add(-n);
-    }
+  }
 }
 
 bool Shaft::separated_from(const BoundingBox& box, double margin) const {
@@ -99,30 +105,20 @@ bool ball_blocks_box(const Vertex& apex, const Sphere& ball, const BoundingBox& 
   if (!((nearest - apex).norm() > tangent + margin)) return false;
   // ... and inside the cone.
   for (int k = 0; k < 8; ++k) {
-    const Vertex v = corner(box, k) - apex;
+    const Vertex v = box_corner(box, k) - apex;
     if (!(axis.dot(v) > v.norm() * cos_gamma)) return false;
   }
   return true;
 }
 
-bool triangle_blocks_box(const Vertex& apex, const Vertex& a, const Vertex& b, const Vertex& c, const BoundingBox& box,
-                         double margin) {
-  if (box.empty()) return false;
-  Vertex n = (b - a).cross(c - a);
-  const double length = n.norm();
-  if (!(length > 0)) return false;
-  n /= length;
-  double s_apex = n.dot(apex - a);
-  if (s_apex < 0) n = -n, s_apex = -s_apex;
-  if (!(s_apex > 0)) return false;
-  std::array<Vertex, 8> corners;
-  std::array<double, 8> along;  // of the segment from the apex to each corner, where it crosses the plane
-  for (int k = 0; k < 8; ++k) {
-    corners[static_cast<std::size_t>(k)] = corner(box, k);
-    const double depth = -n.dot(corners[static_cast<std::size_t>(k)] - a);
-    if (!(depth > margin)) return false;
-    along[static_cast<std::size_t>(k)] = s_apex / (s_apex + depth);
-  }
+TriangleCone::TriangleCone(const Vertex& from, const Vertex& a, const Vertex& b, const Vertex& c) : apex(from), corner(a) {
+  normal = (b - a).cross(c - a);
+  const double length = normal.norm();
+  if (!(length > 0)) return;
+  normal /= length;
+  apex_height = normal.dot(apex - a);
+  if (apex_height < 0) normal = -normal, apex_height = -apex_height;
+  if (!(apex_height > 0)) return;
   const std::array<Vertex, 3> v{a, b, c};
   for (int e = 0; e < 3; ++e) {
     const Vertex& p = v[static_cast<std::size_t>(e)];
@@ -130,14 +126,33 @@ bool triangle_blocks_box(const Vertex& apex, const Vertex& a, const Vertex& b, c
     const Vertex& o = v[static_cast<std::size_t>((e + 2) % 3)];
     Vertex m = (p - apex).cross(q - apex);
     const double m_length = m.norm();
-    if (!(m_length > 0)) return false;
+    if (!(m_length > 0)) return;
     m /= m_length;
     if (m.dot(o - apex) < 0) m = -m;
-    // The crossing point apex + s (y - apex) lies s m.(y - apex) inside this edge's plane.
-    for (std::size_t k = 0; k < 8; ++k)
-      if (!(along[k] * m.dot(corners[k] - apex) > margin)) return false;
+    sides[static_cast<std::size_t>(e)] = m;
+  }
+  valid = true;
+}
+
+bool TriangleCone::blocks(const BoundingBox& box, double margin) const {
+  if (!valid || box.empty()) return false;
+  for (int k = 0; k < 8; ++k) {
+    const Vertex y = box_corner(box, k);
+    const double depth = -normal.dot(y - corner);
+    if (!(depth > margin)) return false;
+    // The crossing point apex + s (y - apex), s = h / (h + depth), lies s m.(y - apex)
+    // inside each edge's plane.
+    const double along = apex_height / (apex_height + depth);
+    const Vertex w = y - apex;
+    for (const Vertex& m : sides)
+      if (!(along * m.dot(w) > margin)) return false;
   }
   return true;
+}
+
+bool triangle_blocks_box(const Vertex& apex, const Vertex& a, const Vertex& b, const Vertex& c, const BoundingBox& box,
+                         double margin) {
+  return TriangleCone(apex, a, b, c).blocks(box, margin);
 }
 
 TriangleTree::TriangleTree(const TriangleMesh& mesh) {
@@ -235,18 +250,23 @@ void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double 
       const Vertex& a = solids.inside.positions[t[0]];
       const Vertex& b = solids.inside.positions[t[1]];
       const Vertex& c = solids.inside.positions[t[2]];
-      if (!all.separated_from(a, b, c, 0.0, 0.0)) faces_.push_back({{a, b, c}, solids.pad});
+      if (all.separated_from(a, b, c, 0.0, 0.0)) continue;
+      // Only faces with some light beyond their plane (seen from the point) can block a
+      // cluster.
+      const TriangleCone cone(x, a, b, c);
+      if (!cone.valid) continue;
+      bool beyond = false;
+      for (int k = 0; k < 8 && !beyond; ++k) beyond = cone.normal.dot(box_corner(lights, k) - a) < -solids.pad;
+      if (!beyond) continue;
+      const double size = (b - a).cross(c - a).norm() / std::max(((a + b + c) / 3 - x).squaredNorm(), 1e-300);
+      faces_.push_back({cone, solids.pad, size});
     }
   }
   // The largest as seen from the point first; at most 64 of each are tried per cluster.
   auto ball_size = [&](const std::pair<Sphere, double>& b) { return b.first.radius / (b.first.center - x).norm(); };
   std::sort(balls_.begin(), balls_.end(), [&](const auto& l, const auto& r) { return ball_size(l) > ball_size(r); });
   if (balls_.size() > 64) balls_.resize(64);
-  auto face_size = [&](const Face& f) {
-    const Vertex centre = (f.corners[0] + f.corners[1] + f.corners[2]) / 3;
-    return (f.corners[1] - f.corners[0]).cross(f.corners[2] - f.corners[0]).norm() / std::max((centre - x).squaredNorm(), 1e-300);
-  };
-  std::sort(faces_.begin(), faces_.end(), [&](const Face& l, const Face& r) { return face_size(l) > face_size(r); });
+  std::sort(faces_.begin(), faces_.end(), [&](const Face& l, const Face& r) { return l.size > r.size; });
   if (faces_.size() > 64) faces_.resize(64);
 }
 
@@ -284,7 +304,7 @@ bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
   const RenderWorld& world = *proofs_->world_;
   const Shaft shaft(x_, box);
   unsigned shells = x_shells_;
-  for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(corner(box, k));
+  for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(box_corner(box, k));
   for (const std::size_t i : near_) {
     if (shells & instance_bit(i)) continue;
     if (static_cast<int>(i) != hit_->instance && shaft.separated_from(world.instance_bounds(i), 0.0)) continue;
@@ -301,7 +321,7 @@ bool ClusterProofs::Point::occluded(const BoundingBox& box, bool on_lights) {
   };
   auto face = [&](int k) {
     const Face& f = faces_[static_cast<std::size_t>(k)];
-    return triangle_blocks_box(x_, f.corners[0], f.corners[1], f.corners[2], box, f.pad);
+    return f.cone.blocks(box, f.pad);
   };
   if (last_ball_ >= 0 && ball(last_ball_)) return true;
   if (last_face_ >= 0 && face(last_face_)) return true;

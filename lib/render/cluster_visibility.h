@@ -56,6 +56,23 @@ class Shaft {
 /// suffice: the cone is convex) and at least L + margin from x.
 bool ball_blocks_box(const Vertex& apex, const Sphere& ball, const BoundingBox& box, double margin);
 
+/// The k-th corner of a box (bit 0: x at max, bit 1: y, bit 2: z).
+Vertex box_corner(const BoundingBox& box, int k);
+
+/// A triangle as seen from an apex, for triangle_blocks_box on many boxes: its plane
+/// (normal towards the apex, the apex's height above it) and the three planes through the
+/// apex and an edge (normals inwards). Not valid when the apex lies in the triangle's plane
+/// or the triangle is degenerate.
+struct TriangleCone {
+  TriangleCone() = default;
+  TriangleCone(const Vertex& from, const Vertex& a, const Vertex& b, const Vertex& c);
+  bool blocks(const BoundingBox& box, double margin) const;
+  Vertex apex = Vertex::Zero(), corner = Vertex::Zero(), normal = Vertex::Zero();
+  double apex_height = 0;
+  std::array<Vertex, 3> sides{};
+  bool valid = false;
+};
+
 /// Whether every segment from `apex` to a point of `box` crosses triangle abc at a point at
 /// least `margin` inside it: the apex strictly on one side of its plane, every corner beyond
 /// it by more than `margin`, and every corner inside the three planes through the apex and
@@ -118,8 +135,9 @@ class ClusterProofs {
     std::vector<bool> x_outside_;                // per near instance: x outside its convex outside solid
     std::vector<std::pair<Sphere, double>> balls_;  // candidate balls with their instance's pad, largest first
     struct Face {
-      std::array<Vertex, 3> corners;
+      TriangleCone cone;
       double pad;
+      double size;  // area over squared distance from the point
     };
     std::vector<Face> faces_;
     int last_ball_ = -1, last_face_ = -1;

@@ -22,9 +22,22 @@ double radical_inverse(std::uint32_t bits) {
   return static_cast<double>(bits) * 0x1.0p-32;
 }
 
-double angle_between(const Vertex& a, const Vertex& b) {  // both unit
-  return std::acos(std::clamp(a.dot(b), -1.0, 1.0));
-}
+// An angle in [0, pi] by its cosine and sine, so that cones combine without acos and cos.
+struct Angle {
+  double cos = 1, sin = 0;
+  static Angle between(const Vertex& a, const Vertex& b) {  // both unit
+    const double c = std::clamp(a.dot(b), -1.0, 1.0);
+    return {c, std::sqrt(std::max(0.0, 1 - c * c))};
+  }
+  // a + b, at most pi.
+  friend Angle operator+(const Angle& a, const Angle& b) {
+    const double s = a.sin * b.cos + a.cos * b.sin;
+    if (s < 0 || (s == 0 && a.cos * b.cos - a.sin * b.sin < 0)) return {-1, 0};
+    return {a.cos * b.cos - a.sin * b.sin, s};
+  }
+  // cos(max(0, a - b)).
+  double cos_of_excess_over(const Angle& b) const { return cos >= b.cos ? 1.0 : cos * b.cos + sin * b.sin; }
+};
 
 }  // namespace
 
@@ -177,16 +190,18 @@ ClusterGeometry cluster_geometry(const LightTree::Node& node, const Vertex& x, c
   double cos_x_lo = 0, cos_x_hi = 1, cos_l_lo = 0, cos_l_hi = 1;
   if (distance > radius) {
     // Directions from x to the box lie within beta of v; from the box to x within beta of -v.
-    const double beta = std::asin(std::clamp(radius / distance, 0.0, 1.0));
+    const double sin_beta = std::clamp(radius / distance, 0.0, 1.0);
+    const Angle beta{std::sqrt(std::max(0.0, 1 - sin_beta * sin_beta)), sin_beta};
     const Vertex u = v / distance;
-    const double alpha_x = angle_between(n, u);
-    cos_x_hi = std::cos(std::max(0.0, alpha_x - beta));
-    cos_x_lo = std::max(0.0, std::cos(std::min(std::numbers::pi, alpha_x + beta)));
+    const Angle alpha_x = Angle::between(n, u);
+    cos_x_hi = alpha_x.cos_of_excess_over(beta);
+    cos_x_lo = std::max(0.0, (alpha_x + beta).cos);
     if (node.cos_half > -1) {
-      const double theta = std::acos(std::clamp(node.cos_half, -1.0, 1.0));
-      const double alpha_l = angle_between(node.axis, -u);
-      cos_l_hi = std::cos(std::max(0.0, alpha_l - theta - beta));
-      cos_l_lo = std::max(0.0, std::cos(std::min(std::numbers::pi, alpha_l + theta + beta)));
+      const double c = std::clamp(node.cos_half, -1.0, 1.0);
+      const Angle spread = Angle{c, std::sqrt(std::max(0.0, 1 - c * c))} + beta;
+      const Angle alpha_l = Angle::between(node.axis, -u);
+      cos_l_hi = alpha_l.cos_of_excess_over(spread);
+      cos_l_lo = std::max(0.0, (alpha_l + spread).cos);
     }
   }
   ClusterGeometry g;
