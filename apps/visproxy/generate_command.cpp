@@ -102,7 +102,7 @@ void add_generate_command(CLI::App& app, int& exit_code) {
       "inside proxies exist): writes the scene file, meshes inline, naming the proxies each piece of furniture uses "
       "(built into the proxy cache on first render).");
   room_command->add_option("-o,--output", *room_path, "Scene file to write (.json)")->required();
-  room_command->add_option("--proxy", room->proxies, "Proxies every piece of furniture names [default: hull inner:128]");
+  room_command->add_option("--proxy", room->proxies, "Proxies every piece of furniture names [default: hull inner:128,grid=128]");
   room_command->add_option("--width", room->width, "Image width of the scene's camera [default: 640]")->check(CLI::Range(1, 16384));
   room_command->add_option("--height", room->height, "Image height [default: 480]")->check(CLI::Range(1, 16384));
   room_command->callback([room, room_path, &exit_code] {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "visproxy/core/errors.h"
 
@@ -30,11 +31,11 @@ Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
   auto add = [&](const Vertex& n) {
     double offset = -std::numeric_limits<double>::infinity();
     for (const Vertex& p : points_) offset = std::max(offset, n.dot(p));
-    planes_.emplace_back(n, offset);
+    planes_[static_cast<std::size_t>(plane_count_++)] = {n, offset};
   };
   for (int axis = 0; axis < 3; ++axis) {
-    planes_.emplace_back(Vertex::Unit(axis), hull_box_.max[axis]);
-    planes_.emplace_back(-Vertex::Unit(axis), -hull_box_.min[axis]);
+    planes_[static_cast<std::size_t>(plane_count_++)] = {Vertex::Unit(axis), hull_box_.max[axis]};
+    planes_[static_cast<std::size_t>(plane_count_++)] = {-Vertex::Unit(axis), -hull_box_.min[axis]};
   }
   // The hull's side faces: planes through the apex and each silhouette edge of the box, an
   // edge between a face turned towards the apex and one turned away. The offset is taken
@@ -65,14 +66,18 @@ Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
 
 bool Shaft::separated_from(const BoundingBox& box, double margin) const {
   if (box.empty()) return true;
-  for (const auto& [n, offset] : planes_)
+  for (int i = 0; i < plane_count_; ++i) {
+    const auto& [n, offset] = planes_[static_cast<std::size_t>(i)];
     if (box_min(n, box) - offset > margin) return true;
+  }
   return false;
 }
 
 bool Shaft::separated_from(const Vertex& a, const Vertex& b, const Vertex& c, double margin, double apex_margin) const {
-  for (const auto& [n, offset] : planes_)
+  for (int i = 0; i < plane_count_; ++i) {
+    const auto& [n, offset] = planes_[static_cast<std::size_t>(i)];
     if (std::min({n.dot(a), n.dot(b), n.dot(c)}) - offset > margin) return true;
+  }
   Vertex m = (b - a).cross(c - a);
   const double length = m.norm();
   if (!(length > 0)) return false;
@@ -87,8 +92,10 @@ bool Shaft::separated_from(const Vertex& a, const Vertex& b, const Vertex& c, do
 }
 
 bool Shaft::separated_from(const Sphere& ball, double margin) const {
-  for (const auto& [n, offset] : planes_)
+  for (int i = 0; i < plane_count_; ++i) {
+    const auto& [n, offset] = planes_[static_cast<std::size_t>(i)];
     if (n.dot(ball.center) - ball.radius - offset > margin) return true;
+  }
   return false;
 }
 
@@ -302,13 +309,14 @@ bool ClusterProofs::Point::instance_clear(std::size_t i, const Shaft& shaft, boo
 
 bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
   const RenderWorld& world = *proofs_->world_;
-  const Shaft shaft(x_, box);
   unsigned shells = x_shells_;
   for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(box_corner(box, k));
+  std::optional<Shaft> shaft;  // made once an instance needs it
   for (const std::size_t i : near_) {
     if (shells & instance_bit(i)) continue;
-    if (static_cast<int>(i) != hit_->instance && shaft.separated_from(world.instance_bounds(i), 0.0)) continue;
-    if (!instance_clear(i, shaft, on_lights)) return false;
+    if (!shaft) shaft.emplace(x_, box);
+    if (static_cast<int>(i) != hit_->instance && shaft->separated_from(world.instance_bounds(i), 0.0)) continue;
+    if (!instance_clear(i, *shaft, on_lights)) return false;
   }
   return true;
 }

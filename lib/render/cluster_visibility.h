@@ -45,7 +45,10 @@ class Shaft {
  private:
   std::array<Vertex, 9> points_;
   BoundingBox box_, hull_box_;
-  std::vector<std::pair<Vertex, double>> planes_;  // unit normal, offset: n . p <= offset for the nine points
+  // Unit normal, offset: n . p <= offset for the nine points. At most 6 axis planes and 6
+  // silhouette edges (a box seen from outside has at most 6).
+  std::array<std::pair<Vertex, double>, 18> planes_;
+  int plane_count_ = 0;
 };
 
 /// Whether every segment from `apex` to a point of `box` enters the ball shrunk by `margin`.

@@ -14,7 +14,7 @@ namespace visproxy {
 struct RoomOptions {
   /// Proxies every piece of furniture names (the first outside one is the shaft test's,
   /// the first inside one the occlusion test's).
-  std::vector<std::string> proxies{"hull", "inner:128"};
+  std::vector<std::string> proxies{"hull", "inner:128,grid=128"};
   int width = 640, height = 480;
 };
 

@@ -115,6 +115,46 @@ TEST_F(CliRender, GeneratedHairballBoundsMatchesExact) {
   expect_bounds_identical_and_finite(*this, folder_ / "hairball" / "hairball.json", "--width 40 --height 30");
 }
 
+// `generate room` writes a scene the schema describes; lightcuts renders it with and without
+// visibility bounds; with both (inscribed balls as inside proxies) the proofs agree with
+// every traced representative, the cut shrinks, and the maps are written; a cut reference of
+// another size, or one given without --maps, gets one line and no image.
+TEST_F(CliRender, GeneratedRoomRendersWithLightcutsAndProvedBounds) {
+  const std::filesystem::path scene = folder_ / "room.json";
+  const auto generated = testing::run_visproxy("generate room -o '" + scene.string() + "' --width 48 --height 36 --proxy hull --proxy inside:40");
+  ASSERT_EQ(generated.exit_code, 0) << generated.err;
+  testing::expect_described(json::parse(read_file(scene)), "scene.schema.json");
+  const auto plain = render(scene, "plain", "--integrator lightcuts --spp 1 --light-points 256 --maps");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto both = render(scene, "both", "--integrator lightcuts --spp 1 --light-points 256 --visibility-bounds both --check-proofs --maps "
+                                          "--cut-reference '" + (folder_ / "plain.cut.pfm").string() + "'");
+  ASSERT_EQ(both.exit_code, 0) << both.err;
+  EXPECT_NE(both.out.find("proofs checked: 0 disagreed"), std::string::npos) << both.out;
+  const json a = json::parse(read_file(folder_ / "plain.stats.json")), b = json::parse(read_file(folder_ / "both.stats.json"));
+  testing::expect_described(a, "render-stats.schema.json");
+  testing::expect_described(b, "render-stats.schema.json");
+  EXPECT_EQ(b["visibility_bounds"], "both");
+  EXPECT_EQ(b["stats"]["integrator"]["proof_disagreements"], 0);
+  EXPECT_GT(b["stats"]["integrator"]["clusters_proved_unoccluded"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(b["stats"]["integrator"]["clusters_proved_occluded"].get<std::uint64_t>(), 0u);
+  EXPECT_LT(b["stats"]["integrator"]["cut_size_mean"].get<double>(), a["stats"]["integrator"]["cut_size_mean"].get<double>());
+  for (const char* map : {"plain.cut.png", "both.cut.png", "both.cut.pfm", "both.cut-reduction.png"})
+    EXPECT_TRUE(std::filesystem::exists(folder_ / map)) << map;
+  const auto small = render(scene, "small", "--integrator lightcuts --spp 1 --light-points 16 --maps --width 8 --height 8");
+  ASSERT_EQ(small.exit_code, 0) << small.err;
+  const auto mismatched = render(scene, "mismatched", "--integrator lightcuts --spp 1 --maps --cut-reference '" + (folder_ / "small.cut.pfm").string() + "'");
+  EXPECT_EQ(mismatched.exit_code, 2);
+  EXPECT_NE(mismatched.err.find("small.cut.pfm"), std::string::npos) << mismatched.err;
+  EXPECT_NE(mismatched.err.find("8x8"), std::string::npos) << mismatched.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "mismatched.pfm"));
+  const auto without_maps = render(scene, "without", "--integrator lightcuts --spp 1 --cut-reference '" + (folder_ / "small.cut.pfm").string() + "'");
+  EXPECT_EQ(without_maps.exit_code, 2);
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "without.pfm"));
+  const auto stochastic = render(scene, "stochastic", "--integrator lightcuts --visibility stochastic --spp 1");
+  EXPECT_EQ(stochastic.exit_code, 2);
+  EXPECT_NE(stochastic.err.find("lightcuts"), std::string::npos) << stochastic.err;
+}
+
 // The shipped VPL scenes are described by the schema and render with virtual point
 // lights: exact (packets and single rays give one image), occluder disks of a sphere set,
 // the control variate with them; the stats say how many VPLs there were and what the clamp

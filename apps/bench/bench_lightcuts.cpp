@@ -1,0 +1,168 @@
+// Lightcuts with visibility bounds, in one process on one scene (the shape of the
+// lightcuts-visibility-bounds paper's table): for no bounds, the lower bound only, the upper
+// bound only, and both:
+//  - mean cut size and its reduction against no bounds, shadow rays per shading point,
+//    clusters proved each way;
+//  - render time and its ratio to no bounds;
+//  - the cut's error: per-pixel relative error (the paper's average relative error) and MSE
+//    against the exact sum over every point light for the same camera samples (a cut with
+//    error 0: brute-force shading);
+// and lightcuts against `direct` exact visibility at equal time: MSE of each against a
+// converged direct reference (many samples of the area lights themselves), and the ratio.
+//   visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K]
+//                            [--error E] [--max-cut C] [--reference-spp R] [--cache DIR]
+//                            [--images DIR] [--proxy SPEC]...  (room: the furniture's proxies)
+// `room` is the scene of `visproxy generate room`.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "visproxy/core/errors.h"
+#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/image.h"
+#include "visproxy/render/renderer.h"
+#include "visproxy/scene/room.h"
+
+namespace {
+
+using namespace visproxy;
+
+double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
+
+// Mean of |a - r| / r over the pixels whose reference luminance is above 1e-3 of the mean.
+double mean_relative_error(const Image& a, const Image& reference) {
+  double mean = 0;
+  for (const Color& c : reference.pixels) mean += luminance(c);
+  mean /= static_cast<double>(std::max<std::size_t>(reference.pixels.size(), 1));
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+    const double r = luminance(reference.pixels[i]);
+    if (!(r > 1e-3 * mean)) continue;
+    sum += std::abs(luminance(a.pixels[i]) - r) / r;
+    ++count;
+  }
+  return count > 0 ? sum / static_cast<double>(count) : 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K] [--error E] "
+                         "[--max-cut C] [--reference-spp R] [--cache DIR] [--images DIR] [--proxy SPEC]...\n");
+    return 2;
+  }
+  const std::string scene_argument = argv[1];
+  int width = 0, height = 0, spp = 4, light_points = 1024, max_cut = 1000, reference_spp = 64;
+  double error = 0.02;
+  std::filesystem::path cache = default_proxy_cache(), images;
+  std::vector<std::string> room_proxies;
+  for (int i = 2; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (i + 1 >= argc) throw Error(flag + ": needs a value");
+    const std::string value = argv[++i];
+    if (flag == "--width") width = std::stoi(value);
+    else if (flag == "--height") height = std::stoi(value);
+    else if (flag == "--spp") spp = std::stoi(value);
+    else if (flag == "--light-points") light_points = std::stoi(value);
+    else if (flag == "--error") error = std::stod(value);
+    else if (flag == "--max-cut") max_cut = std::stoi(value);
+    else if (flag == "--reference-spp") reference_spp = std::stoi(value);
+    else if (flag == "--cache") cache = value;
+    else if (flag == "--images") images = value;
+    else if (flag == "--proxy") room_proxies.push_back(value);
+    else throw Error("unknown option " + flag);
+  }
+  Scene scene;
+  if (scene_argument == "room") {
+    RoomOptions room;
+    if (!room_proxies.empty()) room.proxies = room_proxies;
+    scene = parse_scene(room_scene_json(room), "room.json");
+  } else {
+    scene = load_scene(scene_argument);
+  }
+  if (width > 0) scene.camera.width = width;
+  if (height > 0) scene.camera.height = height;
+  const std::vector<MeshProxies> proxies = prepare_scene_proxies(scene, {.cache = cache, .stochastic_spec = std::nullopt, .seed = 1, .on_proxy = nullptr});
+  const RenderWorld world(scene, proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
+  for (const std::string& note : world.notes()) std::printf("note: %s\n", note.c_str());
+  if (!images.empty()) std::filesystem::create_directories(images);
+
+  RenderOptions options{.integrator = IntegratorKind::lightcuts, .spp = spp, .seed = 1, .light_points = light_points};
+  std::printf("%s, %dx%d, %d spp, %d point lights per area light, error %.3g, max cut %d, seed 1\n", scene_argument.c_str(),
+              scene.camera.width, scene.camera.height, spp, light_points, error, max_cut);
+
+  // Brute force over every point light, for the same camera samples.
+  options.lightcut = {.error = 0, .max_cut = std::numeric_limits<int>::max(), .bounds = VisibilityBounds::none, .check_proofs = false};
+  const RenderResult exact_sum = render(scene, world, options);
+  std::printf("every point light traced (cut error 0): %.1f s, mean cut %.1f, %.1f shadow rays per shading point\n\n",
+              exact_sum.stats.seconds, exact_sum.stats.integrator["cut_size_mean"].get<double>(),
+              exact_sum.stats.integrator["shadow_rays_per_shading_point"].get<double>());
+
+  std::printf("%-8s %10s %9s %10s %8s %9s %12s %12s %10s %11s\n", "bounds", "mean cut", "vs none", "rays/pt", "time s",
+              "vs none", "unoccluded", "occluded", "rel. error", "MSE");
+  double none_cut = 0, none_time = 0, largest_cut = 0;
+  RenderResult both;
+  std::vector<Image> cut_maps;
+  for (const VisibilityBounds bounds : {VisibilityBounds::none, VisibilityBounds::lower, VisibilityBounds::upper, VisibilityBounds::both}) {
+    options.lightcut = {.error = error, .max_cut = max_cut, .bounds = bounds, .check_proofs = false};
+    RenderResult result = render(scene, world, options);
+    const nlohmann::json& s = result.stats.integrator;
+    const double cut = s["cut_size_mean"].get<double>();
+    if (bounds == VisibilityBounds::none) {
+      none_cut = cut, none_time = result.stats.seconds;
+      for (const Color& c : result.cut_map.pixels) largest_cut = std::max(largest_cut, c.x());
+    }
+    std::printf("%-8s %10.1f %8.0f%% %10.1f %8.2f %8.2fx %12llu %12llu %9.2f%% %11.3e\n",
+                std::string(visibility_bounds_name(bounds)).c_str(), cut, 100 * (cut / none_cut - 1),
+                s["shadow_rays_per_shading_point"].get<double>(), result.stats.seconds, none_time / result.stats.seconds,
+                static_cast<unsigned long long>(s["clusters_proved_unoccluded"].get<std::uint64_t>()),
+                static_cast<unsigned long long>(s["clusters_proved_occluded"].get<std::uint64_t>()),
+                100 * mean_relative_error(result.image, exact_sum.image), mean_squared_error(result.image, exact_sum.image));
+    if (!images.empty()) {
+      const std::string name = std::string(visibility_bounds_name(bounds));
+      write_png(images / ("lightcuts-" + name + ".png"), result.image, 1.0);
+      write_png(images / ("lightcuts-" + name + ".cut.png"), result.cut_map, largest_cut > 0 ? 1 / largest_cut : 1.0);
+    }
+    cut_maps.push_back(result.cut_map);
+    if (bounds == VisibilityBounds::both) both = std::move(result);
+  }
+  if (!images.empty()) {
+    Image reduction(scene.camera.width, scene.camera.height);
+    for (std::size_t i = 0; i < reduction.pixels.size(); ++i) {
+      const double before = cut_maps.front().pixels[i].x(), now = cut_maps.back().pixels[i].x();
+      reduction.pixels[i] = Color::Constant(before > 0 ? std::clamp(1 - now / before, 0.0, 1.0) : 0.0);
+    }
+    write_png(images / "lightcuts-cut-reduction.png", reduction, 1.0);
+  }
+
+  // Against direct illumination with exact visibility at equal time, both measured against a
+  // converged direct reference (the area lights themselves, not their point lights).
+  RenderOptions direct{.integrator = IntegratorKind::direct, .spp = reference_spp, .shadow_rays = 4, .seed = 1000};
+  const RenderResult reference = render(scene, world, direct);
+  direct.spp = 1 << 20, direct.shadow_rays = 1, direct.seed = 1, direct.seconds = both.stats.seconds;
+  const RenderResult equal_time = render(scene, world, direct);
+  const double direct_mse = mean_squared_error(equal_time.image, reference.image);
+  const double lightcuts_mse = mean_squared_error(both.image, reference.image);
+  std::printf("\nagainst a converged direct reference (%d spp x 4 shadow rays, %.0f s), at equal time:\n", reference_spp,
+              reference.stats.seconds);
+  std::printf("  lightcuts, both bounds: %.2f s, MSE %.3e (point lights and cut together)\n", both.stats.seconds, lightcuts_mse);
+  std::printf("  direct, exact visibility: %.2f s (%d spp x 1 shadow ray), MSE %.3e\n", equal_time.stats.seconds,
+              equal_time.stats.passes, direct_mse);
+  std::printf("  MSE direct / lightcuts: %.2f (above 1: lightcuts wins at equal time)\n", direct_mse / lightcuts_mse);
+  if (!images.empty()) {
+    write_png(images / "direct-reference.png", reference.image, 1.0);
+    write_png(images / "direct-equal-time.png", equal_time.image, 1.0);
+  }
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "visproxy-bench-lightcuts: %s\n", e.what());
+  return 1;
+}
