@@ -11,7 +11,8 @@
 // converged direct reference (many samples of the area lights themselves), and the ratio.
 //   visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K]
 //                            [--error E] [--max-cut C] [--reference-spp R] [--cache DIR]
-//                            [--images DIR] [--proxy SPEC]...  (room: the furniture's proxies)
+//                            [--images DIR] [--proxy SPEC]...  (room: the furniture's proxies; a scene
+//                            file: the proxies of every instance that names some)
 // `room` is the scene of `visproxy generate room`.
 
 #include <algorithm>
@@ -87,6 +88,10 @@ int main(int argc, char** argv) try {
     scene = parse_scene(room_scene_json(room), "room.json");
   } else {
     scene = load_scene(scene_argument);
+    // --proxy: these proxies for every instance that names some.
+    if (!room_proxies.empty())
+      for (SceneInstance& instance : scene.instances)
+        if (!instance.proxies.empty()) instance.proxies = room_proxies;
   }
   if (width > 0) scene.camera.width = width;
   if (height > 0) scene.camera.height = height;

@@ -428,10 +428,23 @@ py::dict render_scene(const std::filesystem::path& scene_path, const std::string
                       const std::string& estimator, const std::string& probabilities, const std::string& self_shadow, int spp,
                       int shadow_rays, std::uint64_t seed, int width, int height, std::optional<std::string> proxy,
                       std::optional<std::filesystem::path> cache, int probe_rays, int probe_passes,
-                      double probability_floor, std::optional<double> correction_scale, bool split, int vpls, int bounces,
-                      std::uint64_t vpl_seed, double vpl_clamp, double seconds, std::optional<std::filesystem::path> output) {
+                      double probability_floor, std::optional<double> correction_scale, bool split, std::optional<int> vpls, int bounces,
+                      std::uint64_t vpl_seed, double vpl_clamp, double seconds, std::optional<std::filesystem::path> output,
+                      int light_points, double error, int max_cut, const std::string& visibility_bounds, bool check_proofs) {
   RenderOptions options;
-  options.integrator = choice<IntegratorKind>("integrator", integrator, {{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}});
+  options.integrator = choice<IntegratorKind>(
+      "integrator", integrator,
+      {{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}, {"lightcuts", IntegratorKind::lightcuts}});
+  options.lightcut.bounds = choice<VisibilityBounds>("visibility_bounds", visibility_bounds,
+                                                     {{"none", VisibilityBounds::none},
+                                                      {"lower", VisibilityBounds::lower},
+                                                      {"upper", VisibilityBounds::upper},
+                                                      {"both", VisibilityBounds::both}});
+  options.lightcut.error = error;
+  options.lightcut.max_cut = max_cut;
+  options.lightcut.check_proofs = check_proofs;
+  options.light_points = light_points;
+  options.lightcut_vpls = vpls.has_value();
   options.visibility = choice<VisibilityMode>("visibility", visibility,
                                               {{"exact", VisibilityMode::exact},
                                                {"stochastic", VisibilityMode::stochastic},
@@ -458,7 +471,7 @@ py::dict render_scene(const std::filesystem::path& scene_path, const std::string
   options.probability_floor = probability_floor;
   options.correction_scale = correction_scale.value_or(options.integrator == IntegratorKind::vpl ? 0.25 : 2.0);
   options.split = split;
-  options.vpls = vpls;
+  options.vpls = vpls.value_or(1024);
   options.bounces = bounces;
   options.vpl_seed = vpl_seed;
   options.vpl_clamp = vpl_clamp;
@@ -478,10 +491,11 @@ py::dict render_scene(const std::filesystem::path& scene_path, const std::string
                                     .seed = seed,
                                     .on_proxy = nullptr,
                                     .on_verify = nullptr};
-    const std::vector<MeshProxies> proxies = options.visibility == VisibilityMode::exact
+    const bool cluster_bounds = options.integrator == IntegratorKind::lightcuts && options.lightcut.bounds != VisibilityBounds::none;
+    const std::vector<MeshProxies> proxies = options.visibility == VisibilityMode::exact && !cluster_bounds
                                                  ? std::vector<MeshProxies>(scene.instances.size())
                                                  : prepare_scene_proxies(scene, proxy_options);
-    const RenderWorld world(scene, proxies);
+    const RenderWorld world(scene, proxies, {.counting = false, .ray_masks = true, .keep_solids = cluster_bounds});
     notes = world.notes();
     result = render(scene, world, options);
     for (std::size_t i = 0; i < scene.instances.size(); ++i)
@@ -498,6 +512,7 @@ py::dict render_scene(const std::filesystem::path& scene_path, const std::string
   py::dict rendered;
   rendered["image"] = image_array(result.image);
   rendered["p1_map"] = result.p1_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.p1_map));
+  rendered["cut_map"] = result.cut_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.cut_map));
   rendered["cost_map"] = image_array(result.cost_map);
   rendered["stats"] = to_python(result.stats.to_json());
   rendered["instances"] = to_python(instances);
@@ -577,9 +592,11 @@ PYBIND11_MODULE(visproxy, m) {
         "estimator"_a = "eq8", "probabilities"_a = "equal", "self_shadow"_a = "heuristic", "spp"_a = 16,
         "shadow_rays"_a = 1, "seed"_a = 1, "width"_a = 0, "height"_a = 0, "proxy"_a = py::none(), "cache"_a = py::none(),
         "probe_rays"_a = 16, "probe_passes"_a = 0, "probability_floor"_a = 0.05, "correction_scale"_a = py::none(),
-        "split"_a = true, "vpls"_a = 1024, "bounces"_a = 1, "vpl_seed"_a = 1, "vpl_clamp"_a = 0.05, "seconds"_a = 0.0,
-        "output"_a = py::none(),
+        "split"_a = true, "vpls"_a = py::none(), "bounces"_a = 1, "vpl_seed"_a = 1, "vpl_clamp"_a = 0.05, "seconds"_a = 0.0,
+        "output"_a = py::none(), "light_points"_a = 1024, "error"_a = 0.02, "max_cut"_a = 1000, "visibility_bounds"_a = "none",
+        "check_proofs"_a = false,
         "Renders a scene file as 'visproxy render' does with the same options (names as the CLI's, '-' kept in values "
-        "such as 'control-variate'). Returns a dict: image (H, W, 3) float64 linear radiance, p1_map, cost_map, stats, "
-        "instances, proxy_notes. With `output` (.pfm or .exr), also writes the image there.");
+        "such as 'control-variate'; vpls None: 1024 light paths for integrator 'vpl', none for 'lightcuts'). Returns a "
+        "dict: image (H, W, 3) float64 linear radiance, p1_map, cut_map (lightcuts: mean clusters per cut), cost_map, "
+        "stats, instances, proxy_notes. With `output` (.pfm or .exr), also writes the image there.");
 }

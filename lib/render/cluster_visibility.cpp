@@ -28,10 +28,11 @@ Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
   points_[0] = apex;
   for (int k = 0; k < 8; ++k) points_[static_cast<std::size_t>(k) + 1] = box_corner(box, k);
   for (const Vertex& p : points_) hull_box_.extend(p);
-  auto add = [&](const Vertex& n) {
-    double offset = -std::numeric_limits<double>::infinity();
-    for (const Vertex& p : points_) offset = std::max(offset, n.dot(p));
-    planes_[static_cast<std::size_t>(plane_count_++)] = {n, offset};
+  // A side plane through the apex and a silhouette edge: the other corners lie behind it
+  // (by convexity, up to rounding of order 1e-16 of the coordinates, far below every margin
+  // the separations are asked for).
+  auto add = [&](const Vertex& n, const Vertex& c0, const Vertex& c1) {
+    planes_[static_cast<std::size_t>(plane_count_++)] = {n, std::max({n.dot(apex), n.dot(c0), n.dot(c1)})};
   };
   for (int axis = 0; axis < 3; ++axis) {
     planes_[static_cast<std::size_t>(plane_count_++)] = {Vertex::Unit(axis), hull_box_.max[axis]};
@@ -59,7 +60,7 @@ Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
         if (!(length > 1e-12 * edge.norm() * (c0 - apex).norm()) || !(edge.norm() > 0)) continue;
         n /= length;
         if (n.dot(centre - apex) > 0) n = -n;
-        add(n);
+        add(n, c0, c1);
       }
   }
 }
@@ -243,7 +244,7 @@ void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double 
   apex_margin_ = offset / 4;
   x_shells_ = world.convex_shells_holding(x);
   near_.clear(), x_outside_.assign(proofs_->instances_, false), balls_.clear(), faces_.clear();
-  last_ball_ = last_face_ = -1;
+  last_ball_ = last_face_ = last_blocker_ = -1;
   const Shaft all(x, lights);
   for (std::size_t i = 0; i < proofs_->instances_; ++i) {
     if (static_cast<int>(i) != hit.instance && all.separated_from(world.instance_bounds(i), 0.0)) continue;
@@ -312,11 +313,21 @@ bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
   unsigned shells = x_shells_;
   for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(box_corner(box, k));
   std::optional<Shaft> shaft;  // made once an instance needs it
-  for (const std::size_t i : near_) {
-    if (shells & instance_bit(i)) continue;
+  auto clear = [&](std::size_t i) {
+    if (shells & instance_bit(i)) return true;
     if (!shaft) shaft.emplace(x_, box);
-    if (static_cast<int>(i) != hit_->instance && shaft->separated_from(world.instance_bounds(i), 0.0)) continue;
-    if (!instance_clear(i, *shaft, on_lights)) return false;
+    if (static_cast<int>(i) != hit_->instance && shaft->separated_from(world.instance_bounds(i), 0.0)) return true;
+    return instance_clear(i, *shaft, on_lights);
+  };
+  // The instance that stopped the last proof first: a child cluster of a cluster it blocked
+  // usually fails on it too, and then fails at once.
+  if (last_blocker_ >= 0 && !clear(static_cast<std::size_t>(last_blocker_))) return false;
+  for (const std::size_t i : near_) {
+    if (static_cast<int>(i) == last_blocker_) continue;
+    if (!clear(i)) {
+      last_blocker_ = static_cast<int>(i);
+      return false;
+    }
   }
   return true;
 }

@@ -143,7 +143,7 @@ class ClusterProofs {
       double size;  // area over squared distance from the point
     };
     std::vector<Face> faces_;
-    int last_ball_ = -1, last_face_ = -1;
+    int last_ball_ = -1, last_face_ = -1, last_blocker_ = -1;
   };
 
  private:

@@ -228,7 +228,13 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
     ++result.shadow_rays;
     return blocked(light) ? 0 : 1;
   };
-  auto make = [&](std::uint32_t index, std::uint32_t parent_rep, signed char parent_visibility, bool parent_unoccluded) {
+  // `failures`: how many generations of the cluster's ancestors in a row failed a lower
+  // bound proof; after kLowerBoundRetries the subtree is not tried again (a shaft that its
+  // parent's and grandparent's blockers stopped rarely clears for a child, and a failed
+  // shaft test costs several rays).
+  constexpr int kLowerBoundRetries = 2;
+  auto make = [&](std::uint32_t index, std::uint32_t parent_rep, signed char parent_visibility, bool parent_unoccluded,
+                  int failures) {
     const LightTree::Node& node = nodes[index];
     Entry entry;
     entry.node = index;
@@ -242,9 +248,12 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
         ++result.proofs_tried;
         occluded = proofs_->occluded(node.box, node.on_lights);
       }
-      if (!occluded && lower) {
+      if (!occluded && lower && failures < kLowerBoundRetries) {
         ++result.proofs_tried;
         unoccluded = proofs_->unoccluded(node.box, node.on_lights);
+        entry.lower_failures = unoccluded ? 0 : static_cast<unsigned char>(failures + 1);
+      } else {
+        entry.lower_failures = static_cast<unsigned char>(failures);
       }
       result.proved_occluded += occluded ? 1 : 0;
       result.proved_unoccluded += unoccluded ? 1 : 0;
@@ -263,7 +272,7 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
   };
   auto by_error = [](const Entry& a, const Entry& b) { return a.error < b.error; };
   heap_.clear();
-  heap_.push_back(make(LightTree::root, ~0u, -1, false));
+  heap_.push_back(make(LightTree::root, ~0u, -1, false, 0));
   total = heap_.back().estimate;
   while (!heap_.empty() && static_cast<int>(heap_.size()) < options.max_cut) {
     const Entry& top = heap_.front();
@@ -275,7 +284,7 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
     const LightTree::Node& node = nodes[parent.node];
     const std::uint32_t rep = node.representative;
     for (const std::int32_t child : {node.left, node.right}) {
-      const Entry entry = make(static_cast<std::uint32_t>(child), rep, parent.visibility, parent.proved_unoccluded);
+      const Entry entry = make(static_cast<std::uint32_t>(child), rep, parent.visibility, parent.proved_unoccluded, parent.lower_failures);
       total += entry.estimate;
       heap_.push_back(entry);
       std::push_heap(heap_.begin(), heap_.end(), by_error);

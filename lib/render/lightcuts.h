@@ -124,6 +124,7 @@ class CutEvaluator {
     double error = 0;
     signed char visibility = -1;  ///< of the representative: 0, 1, or -1 not known
     bool proved_unoccluded = false;
+    unsigned char lower_failures = 0;  ///< generations in a row whose lower bound proof failed
   };
   const LightTree& tree_;
   std::optional<ClusterProofs::Point> proofs_;

@@ -261,6 +261,24 @@ def test_render_equals_the_cli_image(tmp_path, options):
     assert rendered["stats"]["shadow_rays"] == cli_stats["shadow_rays"]
 
 
+def test_lightcuts_with_bounds_equals_the_cli_image(tmp_path):
+    scene = tmp_path / "room.json"
+    cli("generate", "room", "-o", scene, "--width", 32, "--height", 24, "--proxy", "hull", "--proxy", "inside:40")
+    cache = tmp_path / "cache"
+    cli("render", scene, "-o", tmp_path / "cli.pfm", "--spp", 1, "--cache", cache, "--integrator", "lightcuts",
+        "--light-points", 64, "--visibility-bounds", "both", "--check-proofs")
+    rendered = vp.render(scene, spp=1, cache=cache, integrator="lightcuts", light_points=64, visibility_bounds="both",
+                         check_proofs=True, output=tmp_path / "python.pfm")
+    assert np.array_equal(rendered["image"].astype(np.float32), read_pfm(tmp_path / "cli.pfm"))
+    cuts = rendered["stats"]["integrator"]
+    cli_cuts = json.loads((tmp_path / "cli.stats.json").read_text())["stats"]["integrator"]
+    assert cuts["cut_size_mean"] == cli_cuts["cut_size_mean"]
+    assert cuts["proof_disagreements"] == 0 and cuts["clusters_proved_occluded"] > 0
+    assert rendered["cut_map"].shape == (24, 32, 3) and rendered["cut_map"].min() >= 1
+    with pytest.raises(vp.Error):
+        vp.render(scene, spp=1, cache=cache, integrator="lightcuts", visibility="stochastic")
+
+
 # ---- bad input: the CLI's one-line messages as exceptions ---------------------------
 
 def cli_message(*arguments):
