@@ -3,7 +3,7 @@
 // bound only, and both:
 //  - mean cut size and its reduction against no bounds, shadow rays per shading point,
 //    clusters proved each way;
-//  - render time and its ratio to no bounds;
+//  - render time and its ratio to no bounds; both bounds again at half the error fraction;
 //  - the cut's error: per-pixel relative error (the paper's average relative error) and MSE
 //    against the exact sum over every point light for the same camera samples (a cut with
 //    error 0: brute-force shading);
@@ -16,6 +16,7 @@
 // `room` is the scene of `visproxy generate room`.
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -50,6 +51,18 @@ double mean_relative_error(const Image& a, const Image& reference) {
     ++count;
   }
   return count > 0 ? sum / static_cast<double>(count) : 0.0;
+}
+
+// MSE over all pixels but the `drop` fraction with the largest squared error (luminance of
+// the difference), to see past a few pixels that dominate the mean.
+double trimmed_mse(const Image& a, const Image& reference, double drop) {
+  std::vector<double> errors;
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) errors.push_back((a.pixels[i] - reference.pixels[i]).squaredNorm() / 3);
+  std::sort(errors.begin(), errors.end());
+  const auto keep = static_cast<std::size_t>(static_cast<double>(errors.size()) * (1 - drop));
+  double sum = 0;
+  for (std::size_t i = 0; i < keep; ++i) sum += errors[i];
+  return keep > 0 ? sum / static_cast<double>(keep) : 0.0;
 }
 
 }  // namespace
@@ -115,6 +128,7 @@ int main(int argc, char** argv) try {
               "vs none", "unoccluded", "occluded", "rel. error", "MSE");
   double none_cut = 0, none_time = 0, largest_cut = 0;
   RenderResult both;
+  Image none_image;
   std::vector<Image> cut_maps;
   for (const VisibilityBounds bounds : {VisibilityBounds::none, VisibilityBounds::lower, VisibilityBounds::upper, VisibilityBounds::both}) {
     options.lightcut = {.error = error, .max_cut = max_cut, .bounds = bounds, .check_proofs = false};
@@ -137,7 +151,20 @@ int main(int argc, char** argv) try {
       write_png(images / ("lightcuts-" + name + ".cut.png"), result.cut_map, largest_cut > 0 ? 1 / largest_cut : 1.0);
     }
     cut_maps.push_back(result.cut_map);
+    if (bounds == VisibilityBounds::none) none_image = result.image;
     if (bounds == VisibilityBounds::both) both = std::move(result);
+  }
+  // Both bounds again with half the error fraction: the bounds' saving spent on accuracy.
+  {
+    options.lightcut = {.error = error / 2, .max_cut = max_cut, .bounds = VisibilityBounds::both, .check_proofs = false};
+    const RenderResult result = render(scene, world, options);
+    const nlohmann::json& s = result.stats.integrator;
+    const double cut = s["cut_size_mean"].get<double>();
+    std::printf("%-8s %10.1f %8.0f%% %10.1f %8.2f %8.2fx %12llu %12llu %9.2f%% %11.3e   (error %.3g)\n", "both", cut,
+                100 * (cut / none_cut - 1), s["shadow_rays_per_shading_point"].get<double>(), result.stats.seconds,
+                none_time / result.stats.seconds, static_cast<unsigned long long>(s["clusters_proved_unoccluded"].get<std::uint64_t>()),
+                static_cast<unsigned long long>(s["clusters_proved_occluded"].get<std::uint64_t>()),
+                100 * mean_relative_error(result.image, exact_sum.image), mean_squared_error(result.image, exact_sum.image), error / 2);
   }
   if (!images.empty()) {
     Image reduction(scene.camera.width, scene.camera.height);
@@ -146,6 +173,21 @@ int main(int argc, char** argv) try {
       reduction.pixels[i] = Color::Constant(before > 0 ? std::clamp(1 - now / before, 0.0, 1.0) : 0.0);
     }
     write_png(images / "lightcuts-cut-reduction.png", reduction, 1.0);
+    // At half size, 2 x 2: the image without and with both bounds above their cut maps (one
+    // scale: white = the largest mean cut without bounds).
+    const int w = scene.camera.width / 2, h = scene.camera.height / 2;
+    Image montage(2 * w, 2 * h);
+    const std::array<const Image*, 4> quadrants{&none_image, &both.image, &cut_maps.front(), &cut_maps.back()};
+    for (int q = 0; q < 4; ++q) {
+      const double scale = q < 2 ? 1.0 : (largest_cut > 0 ? 1 / largest_cut : 1.0);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const Image& from = *quadrants[static_cast<std::size_t>(q)];
+          const Color sum = from.at(2 * x, 2 * y) + from.at(2 * x + 1, 2 * y) + from.at(2 * x, 2 * y + 1) + from.at(2 * x + 1, 2 * y + 1);
+          montage.at((q % 2) * w + x, (q / 2) * h + y) = sum * (scale / 4);
+        }
+    }
+    write_png(images / "lightcuts-montage.png", montage, 1.0);
   }
 
   // Against direct illumination with exact visibility at equal time, both measured against a
@@ -162,6 +204,10 @@ int main(int argc, char** argv) try {
   std::printf("  direct, exact visibility: %.2f s (%d spp x 1 shadow ray), MSE %.3e\n", equal_time.stats.seconds,
               equal_time.stats.passes, direct_mse);
   std::printf("  MSE direct / lightcuts: %.2f (above 1: lightcuts wins at equal time)\n", direct_mse / lightcuts_mse);
+  const double direct_trimmed = trimmed_mse(equal_time.image, reference.image, 0.01);
+  const double lightcuts_trimmed = trimmed_mse(both.image, reference.image, 0.01);
+  std::printf("  without each image's 1 %% of pixels with the largest error: lightcuts %.3e, direct %.3e, ratio %.2f\n",
+              lightcuts_trimmed, direct_trimmed, direct_trimmed / lightcuts_trimmed);
   if (!images.empty()) {
     write_png(images / "direct-reference.png", reference.image, 1.0);
     write_png(images / "direct-equal-time.png", equal_time.image, 1.0);
