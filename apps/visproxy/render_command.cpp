@@ -69,7 +69,8 @@ void add_render_command(CLI::App& app, int& exit_code) {
   CLI::App* command = app.add_subcommand(
       "render",
       "Render a scene lit by its area lights (Lambertian surfaces): direct illumination with M shadow rays per camera "
-      "sample, or with --integrator vpl also the indirect light of N virtual point lights. Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
+      "sample, or with --integrator vpl also the indirect light of N virtual point lights, or with --integrator lightcuts K "
+      "point lights per area light through lightcuts, whose clusters the proxies may prove free or occluded. Writes OUT.pfm (linear radiance), OUT.png (sRGB) and OUT.stats.json; builds the proxies the scene "
       "names that are not in the cache yet.");
   command->add_option("scene", o->scene, "Scene file: JSON (format in README.md, schema data/schemas/scene.schema.json), or a glTF 2.0 .gltf/.glb (or other Assimp file) whose nodes, emissive materials and camera make the scene")->required();
   command->add_option("-o,--output", o->output, "Output image: .pfm or .exr (linear radiance)")->required();

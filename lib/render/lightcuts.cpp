@@ -141,8 +141,16 @@ LightTree::LightTree(std::vector<PointLight> lights, std::uint64_t seed) : light
     BoundingBox positions;
     for (std::size_t k = begin; k < end; ++k) positions.extend(lights_[order[k]].position);
     (positions.max - positions.min).maxCoeff(&axis);
-    const std::size_t middle = begin + (end - begin) / 2;
-    std::nth_element(order.begin() + static_cast<std::ptrdiff_t>(begin), order.begin() + static_cast<std::ptrdiff_t>(middle),
+    // Points on lights apart from VPLs first, so that the upper bound (for clusters on
+    // lights only) applies from the root's child on; then median splits.
+    const auto on_lights_end = static_cast<std::size_t>(
+        std::stable_partition(order.begin() + static_cast<std::ptrdiff_t>(begin), order.begin() + static_cast<std::ptrdiff_t>(end),
+                              [&](std::uint32_t i) { return lights_[i].on_light; }) -
+        order.begin());
+    const bool mixed = on_lights_end > begin && on_lights_end < end;
+    const std::size_t middle = mixed ? on_lights_end : begin + (end - begin) / 2;
+    if (!mixed)
+      std::nth_element(order.begin() + static_cast<std::ptrdiff_t>(begin), order.begin() + static_cast<std::ptrdiff_t>(middle),
                      order.begin() + static_cast<std::ptrdiff_t>(end), [&](std::uint32_t l, std::uint32_t r) {
                        const double a = lights_[l].position[axis], b = lights_[r].position[axis];
                        return a < b || (a == b && l < r);

@@ -47,8 +47,8 @@ std::vector<PointLight> area_light_points(const Scene& scene, const RenderWorld&
 std::vector<PointLight> vpl_point_lights(const RenderWorld& world, const std::vector<VirtualPointLight>& lights,
                                          double max_geometric);
 
-/// The light tree: a binary tree over the lights, split at the median of the longest axis
-/// of each node's box; each node holds its lights' box (grown by their end offsets), the
+/// The light tree: a binary tree over the lights, points on area lights apart from VPLs at
+/// the first split, then split at the median of the longest axis of each node's box; each node holds its lights' box (grown by their end offsets), the
 /// cone of their normals, their total intensity and a representative light, chosen among
 /// its children's with probability proportional to their luminance (seeded).
 class LightTree {

@@ -18,6 +18,7 @@
 #include "visproxy/render/lightcuts.h"
 #include "visproxy/render/renderer.h"
 #include "visproxy/render/sampling.h"
+#include "visproxy/render/virtual_point_lights.h"
 #include "visproxy/scene/room.h"
 #include "render/render_test_scenes.h"
 #include "visproxy/trace/embree_support.h"
@@ -352,7 +353,12 @@ void expect_error_zero_is_brute_force(const Vertex& offset, bool balls) {
   const Room room = furnished_room(offset, balls);
   const RenderWorld world(room.scene, room.proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
   ASSERT_TRUE(world.notes().empty()) << world.notes().front();
-  const LightTree tree(area_light_points(room.scene, world, 96, 2), 2);
+  // The area light's points and the VPLs of 64 light paths (their geometric term clamped).
+  std::vector<PointLight> lights = area_light_points(room.scene, world, 96, 2);
+  for (const PointLight& vpl : vpl_point_lights(world, trace_virtual_point_lights(room.scene, world, {.paths = 64, .bounces = 1, .seed = 3}), 40.0))
+    lights.push_back(vpl);
+  ASSERT_GT(lights.size(), 140u);
+  const LightTree tree(lights, 2);
   const ClusterProofs proofs(world, room.scene.instances.size());
   CutEvaluator plain(tree, nullptr), bounded(tree, &proofs);
   const Color brdf(0.2, 0.15, 0.1);
@@ -360,7 +366,7 @@ void expect_error_zero_is_brute_force(const Vertex& offset, bool balls) {
   for (const Shading& s : camera_points(room.scene, world, 300, 4)) {
     auto blocked = [&](std::uint32_t i) {
       const PointLight& l = tree.lights()[i];
-      return world.mesh_blocks(s.x, segment_end(world, l.position, l.normal, s.x));
+      return world.mesh_blocks(s.x, l.on_light ? segment_end(world, l.position, l.normal, s.x) : l.end);
     };
     const Color expected = brute_force(world, tree, s.x, s.hit.normal, brdf);
     const CutOptions exact{.error = 0, .max_cut = 1000, .bounds = VisibilityBounds::none, .check_proofs = false};
@@ -442,6 +448,27 @@ TEST(Lightcuts, ProofsAgreeWithTracedRepresentativesOnTheRoom) {
       difference += (none.image.pixels[i] - both.image.pixels[i]).cwiseAbs().sum(), total += none.image.pixels[i].sum();
     EXPECT_LT(difference, 0.03 * total);
   }
+}
+
+// With VPLs among the point lights (clusters off the lights: no upper bound, and lower bounds
+// only where no traced outside proxy needs a light end), proofs still agree with every
+// traced representative, and the VPLs are reported.
+TEST(Lightcuts, VirtualPointLightsJoinTheCut) {
+  const Room room = furnished_room(Vertex::Zero(), false, 64, 48);
+  const RenderWorld world(room.scene, room.proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
+  RenderOptions options{.integrator = IntegratorKind::lightcuts, .spp = 1, .seed = 4, .vpls = 128, .light_points = 128, .lightcut_vpls = true};
+  options.lightcut = {.error = 0.02, .max_cut = 1000, .bounds = VisibilityBounds::both, .check_proofs = true};
+  const RenderResult with = render(room.scene, world, options);
+  const nlohmann::json& s = with.stats.integrator;
+  EXPECT_GT(s["virtual_point_lights"].get<std::size_t>(), 100u);
+  EXPECT_EQ(s["point_lights"].get<std::size_t>(), 128u + s["virtual_point_lights"].get<std::size_t>());
+  EXPECT_EQ(s["proof_disagreements"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(s["clusters_proved_unoccluded"].get<std::uint64_t>() + s["clusters_proved_occluded"].get<std::uint64_t>(), 100u);
+  options.lightcut_vpls = false;
+  const RenderResult without = render(room.scene, world, options);
+  double a = 0, b = 0;
+  for (std::size_t i = 0; i < with.image.pixels.size(); ++i) a += with.image.pixels[i].sum(), b += without.image.pixels[i].sum();
+  EXPECT_GT(a, 1.05 * b);  // the indirect light adds to the direct
 }
 
 TEST(Lightcuts, ImagesDoNotDependOnTheNumberOfThreads) {
