@@ -7,7 +7,7 @@
 //  - the cut's error: per-pixel relative error (the paper's average relative error) and MSE
 //    against the exact sum over every point light for the same camera samples (a cut with
 //    error 0: brute-force shading);
-// and lightcuts against `direct` exact visibility at equal time: MSE of each against a
+// and lightcuts against `direct` (with --vpls N: `vpl`, the same VPLs) exact visibility at equal time: MSE of each against a
 // converged direct reference (many samples of the area lights themselves), and the ratio.
 //   visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K]
 //                            [--error E] [--max-cut C] [--reference-spp R] [--cache DIR]
@@ -70,11 +70,11 @@ double trimmed_mse(const Image& a, const Image& reference, double drop) {
 int main(int argc, char** argv) try {
   if (argc < 2) {
     std::fprintf(stderr, "usage: visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K] [--error E] "
-                         "[--max-cut C] [--reference-spp R] [--cache DIR] [--images DIR] [--proxy SPEC]...\n");
+                         "[--max-cut C] [--reference-spp R] [--vpls N] [--cache DIR] [--images DIR] [--proxy SPEC]...\n");
     return 2;
   }
   const std::string scene_argument = argv[1];
-  int width = 0, height = 0, spp = 4, light_points = 1024, max_cut = 1000, reference_spp = 64;
+  int width = 0, height = 0, spp = 4, light_points = 1024, max_cut = 1000, reference_spp = 64, vpls = 0;
   double error = 0.02;
   std::filesystem::path cache = default_proxy_cache(), images;
   std::vector<std::string> room_proxies;
@@ -89,6 +89,7 @@ int main(int argc, char** argv) try {
     else if (flag == "--error") error = std::stod(value);
     else if (flag == "--max-cut") max_cut = std::stoi(value);
     else if (flag == "--reference-spp") reference_spp = std::stoi(value);
+    else if (flag == "--vpls") vpls = std::stoi(value);
     else if (flag == "--cache") cache = value;
     else if (flag == "--images") images = value;
     else if (flag == "--proxy") room_proxies.push_back(value);
@@ -114,8 +115,10 @@ int main(int argc, char** argv) try {
   if (!images.empty()) std::filesystem::create_directories(images);
 
   RenderOptions options{.integrator = IntegratorKind::lightcuts, .spp = spp, .seed = 1, .light_points = light_points};
-  std::printf("%s, %dx%d, %d spp, %d point lights per area light, error %.3g, max cut %d, seed 1\n", scene_argument.c_str(),
-              scene.camera.width, scene.camera.height, spp, light_points, error, max_cut);
+  options.vpls = std::max(vpls, 1);
+  options.lightcut_vpls = vpls > 0;
+  std::printf("%s, %dx%d, %d spp, %d point lights per area light and the VPLs of %d light paths, error %.3g, max cut %d, seed 1\n",
+              scene_argument.c_str(), scene.camera.width, scene.camera.height, spp, light_points, vpls, error, max_cut);
 
   // Brute force over every point light, for the same camera samples.
   options.lightcut = {.error = 0, .max_cut = std::numeric_limits<int>::max(), .bounds = VisibilityBounds::none, .check_proofs = false};
@@ -192,18 +195,22 @@ int main(int argc, char** argv) try {
 
   // Against direct illumination with exact visibility at equal time, both measured against a
   // converged direct reference (the area lights themselves, not their point lights).
-  RenderOptions direct{.integrator = IntegratorKind::direct, .spp = reference_spp, .shadow_rays = 4, .seed = 1000};
+  // With VPLs the peer is the vpl integrator (M area-light samples plus every VPL, the same
+  // VPLs and clamp), exact visibility.
+  RenderOptions direct{.integrator = vpls > 0 ? IntegratorKind::vpl : IntegratorKind::direct, .spp = reference_spp, .shadow_rays = 4, .seed = 1000};
+  direct.vpls = options.vpls;
   const RenderResult reference = render(scene, world, direct);
   direct.spp = 1 << 20, direct.shadow_rays = 1, direct.seed = 1, direct.seconds = both.stats.seconds;
   const RenderResult equal_time = render(scene, world, direct);
   const double direct_mse = mean_squared_error(equal_time.image, reference.image);
   const double lightcuts_mse = mean_squared_error(both.image, reference.image);
-  std::printf("\nagainst a converged direct reference (%d spp x 4 shadow rays, %.0f s), at equal time:\n", reference_spp,
+  const char* peer = vpls > 0 ? "vpl" : "direct";
+  std::printf("\nagainst a converged %s reference (%d spp x 4 shadow rays, %.0f s), at equal time:\n", peer, reference_spp,
               reference.stats.seconds);
   std::printf("  lightcuts, both bounds: %.2f s, MSE %.3e (point lights and cut together)\n", both.stats.seconds, lightcuts_mse);
-  std::printf("  direct, exact visibility: %.2f s (%d spp x 1 shadow ray), MSE %.3e\n", equal_time.stats.seconds,
+  std::printf("  %s, exact visibility: %.2f s (%d spp x 1 shadow ray), MSE %.3e\n", peer, equal_time.stats.seconds,
               equal_time.stats.passes, direct_mse);
-  std::printf("  MSE direct / lightcuts: %.2f (above 1: lightcuts wins at equal time)\n", direct_mse / lightcuts_mse);
+  std::printf("  MSE %s / lightcuts: %.2f (above 1: lightcuts wins at equal time)\n", peer, direct_mse / lightcuts_mse);
   const double direct_trimmed = trimmed_mse(equal_time.image, reference.image, 0.01);
   const double lightcuts_trimmed = trimmed_mse(both.image, reference.image, 0.01);
   std::printf("  without each image's 1 %% of pixels with the largest error: lightcuts %.3e, direct %.3e, ratio %.2f\n",

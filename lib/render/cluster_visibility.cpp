@@ -235,25 +235,49 @@ ClusterProofs::ClusterProofs(const RenderWorld& world, std::size_t instances) : 
   }
 }
 
-void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double offset, const BoundingBox& lights) {
-  const RenderWorld& world = *proofs_->world_;
+void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double offset, const BoundingBox& lights,
+                                 const BoundingBox& on_lights) {
   x_ = x;
   hit_ = &hit;
   // The point lies `offset` off its surface, up to Embree's rounding of the hit distance
   // (an eighth of the offset at most): a quarter of it is kept from the own triangles' planes.
   apex_margin_ = offset / 4;
-  x_shells_ = world.convex_shells_holding(x);
-  near_.clear(), x_outside_.assign(proofs_->instances_, false), balls_.clear(), faces_.clear();
+  lights_ = lights, on_lights_ = on_lights;
+  lower_ready_ = upper_ready_ = false;
   last_ball_ = last_face_ = last_blocker_ = -1;
-  const Shaft all(x, lights);
+}
+
+// What the lower bound needs of the point: the instances the shaft to every light may meet,
+// the point's convex shells, and whether it lies outside each convex outside solid. Made on
+// the first proof, so that points whose cuts need none pay nothing.
+void ClusterProofs::Point::prepare_lower() {
+  const RenderWorld& world = *proofs_->world_;
+  lower_ready_ = true;
+  x_shells_ = world.convex_shells_holding(x_);
+  near_.clear(), x_outside_.assign(proofs_->instances_, false);
+  const Shaft all(x_, lights_);
   for (std::size_t i = 0; i < proofs_->instances_; ++i) {
-    if (static_cast<int>(i) != hit.instance && all.separated_from(world.instance_bounds(i), 0.0)) continue;
+    if (static_cast<int>(i) != hit_->instance && all.separated_from(world.instance_bounds(i), 0.0)) continue;
     near_.push_back(i);
+    for (const auto& [n, d] : world.instance_solids(i).outside_planes)
+      if (n.dot(x_) - d > world.instance_solids(i).pad) x_outside_[i] = true;
+  }
+}
+
+// What the upper bound needs: the inside balls and inside triangles the shaft to the lights'
+// points may meet, the largest as seen from the point first (at most 64 of each).
+void ClusterProofs::Point::prepare_upper() {
+  const RenderWorld& world = *proofs_->world_;
+  upper_ready_ = true;
+  balls_.clear(), faces_.clear();
+  if (on_lights_.empty()) return;
+  const Shaft all(x_, on_lights_);
+  for (std::size_t i = 0; i < proofs_->instances_; ++i) {
     const InstanceSolids& solids = world.instance_solids(i);
-    for (const auto& [n, d] : solids.outside_planes)
-      if (n.dot(x) - d > solids.pad) x_outside_[i] = true;
+    if (solids.inside_spheres.empty() && solids.inside.triangles.empty()) continue;
+    if (all.separated_from(world.instance_bounds(i), 0.0)) continue;
     for (const Sphere& ball : solids.inside_spheres)
-      if ((ball.center - x).norm() > ball.radius + solids.pad && !all.separated_from(ball, 0.0)) balls_.emplace_back(ball, solids.pad);
+      if ((ball.center - x_).norm() > ball.radius + solids.pad && !all.separated_from(ball, 0.0)) balls_.emplace_back(ball, solids.pad);
     for (const Triangle& t : solids.inside.triangles) {
       const Vertex& a = solids.inside.positions[t[0]];
       const Vertex& b = solids.inside.positions[t[1]];
@@ -261,17 +285,16 @@ void ClusterProofs::Point::begin(const Vertex& x, const SurfaceHit& hit, double 
       if (all.separated_from(a, b, c, 0.0, 0.0)) continue;
       // Only faces with some light beyond their plane (seen from the point) can block a
       // cluster.
-      const TriangleCone cone(x, a, b, c);
+      const TriangleCone cone(x_, a, b, c);
       if (!cone.valid) continue;
       bool beyond = false;
-      for (int k = 0; k < 8 && !beyond; ++k) beyond = cone.normal.dot(box_corner(lights, k) - a) < -solids.pad;
+      for (int k = 0; k < 8 && !beyond; ++k) beyond = cone.normal.dot(box_corner(on_lights_, k) - a) < -solids.pad;
       if (!beyond) continue;
-      const double size = (b - a).cross(c - a).norm() / std::max(((a + b + c) / 3 - x).squaredNorm(), 1e-300);
+      const double size = (b - a).cross(c - a).norm() / std::max(((a + b + c) / 3 - x_).squaredNorm(), 1e-300);
       faces_.push_back({cone, solids.pad, size});
     }
   }
-  // The largest as seen from the point first; at most 64 of each are tried per cluster.
-  auto ball_size = [&](const std::pair<Sphere, double>& b) { return b.first.radius / (b.first.center - x).norm(); };
+  auto ball_size = [&](const std::pair<Sphere, double>& b) { return b.first.radius / (b.first.center - x_).norm(); };
   std::sort(balls_.begin(), balls_.end(), [&](const auto& l, const auto& r) { return ball_size(l) > ball_size(r); });
   if (balls_.size() > 64) balls_.resize(64);
   std::sort(faces_.begin(), faces_.end(), [&](const Face& l, const Face& r) { return l.size > r.size; });
@@ -310,6 +333,7 @@ bool ClusterProofs::Point::instance_clear(std::size_t i, const Shaft& shaft, boo
 
 bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
   const RenderWorld& world = *proofs_->world_;
+  if (!lower_ready_) prepare_lower();
   unsigned shells = x_shells_;
   for (int k = 0; k < 8 && shells != 0; ++k) shells &= world.convex_shells_holding(box_corner(box, k));
   std::optional<Shaft> shaft;  // made once an instance needs it
@@ -334,6 +358,7 @@ bool ClusterProofs::Point::unoccluded(const BoundingBox& box, bool on_lights) {
 
 bool ClusterProofs::Point::occluded(const BoundingBox& box, bool on_lights) {
   if (!on_lights) return false;
+  if (!upper_ready_) prepare_upper();
   auto ball = [&](int k) {
     const auto& [sphere, pad] = balls_[static_cast<std::size_t>(k)];
     return ball_blocks_box(x_, sphere, box, pad);

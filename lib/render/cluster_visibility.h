@@ -117,9 +117,10 @@ class ClusterProofs {
   class Point {
    public:
     explicit Point(const ClusterProofs& proofs) : proofs_(&proofs) {}
-    /// `x` is the shading point (moved off the surface by `offset`), `hit` the surface, and
-    /// `lights` a box holding every light the cuts may reach (culls instances once).
-    void begin(const Vertex& x, const SurfaceHit& hit, double offset, const BoundingBox& lights);
+    /// `x` is the shading point (moved off the surface by `offset`), `hit` the surface,
+    /// `lights` a box holding every light the cuts may reach and `on_lights` one holding
+    /// every light on an area light (empty if none), which cull instances and occluders once.
+    void begin(const Vertex& x, const SurfaceHit& hit, double offset, const BoundingBox& lights, const BoundingBox& on_lights);
     /// Every segment from the point to `box` is unblocked. `on_lights`: every light of the
     /// cluster lies on an area light (which RenderWorld checked to lie outside the traced
     /// outside proxies' solids).
@@ -129,6 +130,10 @@ class ClusterProofs {
 
    private:
     bool instance_clear(std::size_t instance, const Shaft& shaft, bool on_lights) const;
+    void prepare_lower();
+    void prepare_upper();
+    BoundingBox lights_, on_lights_;
+    bool lower_ready_ = false, upper_ready_ = false;
     const ClusterProofs* proofs_;
     Vertex x_ = Vertex::Zero();
     const SurfaceHit* hit_ = nullptr;

@@ -228,7 +228,14 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
   const Vertex& n = hit.normal;
   const bool upper = proofs_ && (options.bounds == VisibilityBounds::upper || options.bounds == VisibilityBounds::both);
   const bool lower = proofs_ && (options.bounds == VisibilityBounds::lower || options.bounds == VisibilityBounds::both);
-  if (upper || lower) proofs_->begin(x, hit, offset, nodes[LightTree::root].box);
+  if (upper || lower) {
+    // The area lights' points are the root or its first child (LightTree keeps them apart).
+    const LightTree::Node& root = nodes[LightTree::root];
+    BoundingBox on_lights;
+    if (root.on_lights) on_lights = root.box;
+    else if (root.left >= 0 && nodes[static_cast<std::size_t>(root.left)].on_lights) on_lights = nodes[static_cast<std::size_t>(root.left)].box;
+    proofs_->begin(x, hit, offset, root.box, on_lights);
+  }
   const double brdf_luminance = luminance(brdf);
   Color total = Color::Zero();
 

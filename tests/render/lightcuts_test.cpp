@@ -412,7 +412,8 @@ TEST(ClusterProofs, OwnInstanceInTheShaftIsNotProvedFree) {
   const Vertex x = hit->position + offset * hit->normal;
   const ClusterProofs proofs(world, 1);
   ClusterProofs::Point point(proofs);
-  point.begin(x, *hit, offset, {{-3, 2.9, -1}, {3, 3.1, 1}});
+  const BoundingBox lights{{-3, 2.9, -1}, {3, 3.1, 1}};
+  point.begin(x, *hit, offset, lights, lights);
   const BoundingBox behind{{2, 2.95, -0.2}, {2.5, 3.05, 0.2}}, open{{-2.5, 2.95, -0.2}, {-2, 3.05, 0.2}};
   EXPECT_FALSE(point.unoccluded(behind, true));
   EXPECT_TRUE(point.unoccluded(open, true));
