@@ -213,8 +213,8 @@ int main(int argc, char** argv) try {
   std::printf("  MSE %s / lightcuts: %.2f (above 1: lightcuts wins at equal time)\n", peer, direct_mse / lightcuts_mse);
   const double direct_trimmed = trimmed_mse(equal_time.image, reference.image, 0.01);
   const double lightcuts_trimmed = trimmed_mse(both.image, reference.image, 0.01);
-  std::printf("  without each image's 1 %% of pixels with the largest error: lightcuts %.3e, direct %.3e, ratio %.2f\n",
-              lightcuts_trimmed, direct_trimmed, direct_trimmed / lightcuts_trimmed);
+  std::printf("  without each image's 1 %% of pixels with the largest error: lightcuts %.3e, %s %.3e, ratio %.2f\n",
+              lightcuts_trimmed, peer, direct_trimmed, direct_trimmed / lightcuts_trimmed);
   if (!images.empty()) {
     write_png(images / "direct-reference.png", reference.image, 1.0);
     write_png(images / "direct-equal-time.png", equal_time.image, 1.0);
