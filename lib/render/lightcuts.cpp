@@ -281,7 +281,8 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
     if (options.check_proofs && (occluded || unoccluded) && blocked(node.representative) == (entry.visibility == 1))
       ++result.disagreements;
     if (entry.visibility > 0) entry.estimate = brdf.cwiseProduct(node.intensity) * rep_g;
-    if (node.lights > 1 && !occluded)
+    // (A black cluster has no error, even where its geometric bound is infinite.)
+    if (node.lights > 1 && !occluded && luminance(node.intensity) > 0 && brdf_luminance > 0)
       entry.error = brdf_luminance * luminance(node.intensity) * (g.upper - (unoccluded ? g.lower : 0.0));
     return entry;
   };

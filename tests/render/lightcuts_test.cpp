@@ -472,6 +472,35 @@ TEST(Lightcuts, VirtualPointLightsJoinTheCut) {
   EXPECT_GT(a, 1.05 * b);  // the indirect light adds to the direct
 }
 
+// Black lights around the shading point (its cluster's box holds the point, so its
+// geometric bound is infinite) next to bright ones: the black clusters have no error, and
+// the cut with error 0 is still the sum over every light.
+TEST(Lightcuts, BlackLightsAroundThePointLeaveTheCutExact) {
+  std::vector<PointLight> lights;
+  auto add = [&](const Vertex& p, double radiance) {
+    PointLight l;
+    l.position = l.end = p;
+    l.normal = Vertex(0, -1, 0);
+    l.intensity = Color::Constant(radiance);
+    l.two_sided = true;
+    lights.push_back(l);
+  };
+  for (int i = 0; i < 8; ++i) add(Vertex(i & 1 ? 0.1 : -0.1, i & 2 ? 0.1 : -0.1, i & 4 ? 0.1 : -0.1), 0.0);
+  for (int i = 0; i < 8; ++i) add(Vertex(3 + 0.3 * i, 2, 0.1 * i), 1.0 + i);  // the first split parts them from the black ones
+  const LightTree tree(lights, 1);
+  SurfaceHit hit;
+  hit.position = Vertex::Zero();
+  hit.normal = Vertex(0, 1, 0);
+  CutEvaluator evaluator(tree, nullptr);
+  const CutResult cut = evaluator.evaluate(Vertex::Zero(), hit, 0.0, Color::Constant(0.3),
+                                           {.error = 0, .max_cut = 100, .bounds = VisibilityBounds::none, .check_proofs = false},
+                                           [](std::uint32_t) { return false; });
+  Color expected = Color::Zero();
+  for (const PointLight& l : lights) expected += Color::Constant(0.3).cwiseProduct(l.intensity) * light_geometry(l, Vertex::Zero(), hit.normal);
+  EXPECT_GT(expected.norm(), 0);
+  EXPECT_LE((cut.radiance - expected).norm(), 1e-12 * expected.norm());
+}
+
 TEST(Lightcuts, ImagesDoNotDependOnTheNumberOfThreads) {
   const Room room = furnished_room(Vertex::Zero(), false, 80, 56);  // 5 x 4 tiles
   const RenderWorld world(room.scene, room.proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
