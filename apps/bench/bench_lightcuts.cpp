@@ -35,8 +35,6 @@ namespace {
 
 using namespace visproxy;
 
-double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
-
 // Mean of |a - r| / r over the pixels whose reference luminance is above 1e-3 of the mean.
 double mean_relative_error(const Image& a, const Image& reference) {
   double mean = 0;

@@ -25,10 +25,11 @@ double box_min(const Vertex& n, const BoundingBox& box) {
 
 }  // namespace
 
-Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
+Shaft::Shaft(const Vertex& apex, const BoundingBox& box) {
   points_[0] = apex;
   for (int k = 0; k < 8; ++k) points_[static_cast<std::size_t>(k) + 1] = box_corner(box, k);
-  for (const Vertex& p : points_) hull_box_.extend(p);
+  BoundingBox hull_box;
+  for (const Vertex& p : points_) hull_box.extend(p);
   // A side plane through the apex and a silhouette edge: the other corners lie behind it
   // (by convexity, up to rounding of order 1e-16 of the coordinates, far below every margin
   // the separations are asked for).
@@ -36,8 +37,8 @@ Shaft::Shaft(const Vertex& apex, const BoundingBox& box) : box_(box) {
     planes_[static_cast<std::size_t>(plane_count_++)] = {n, std::max({n.dot(apex), n.dot(c0), n.dot(c1)})};
   };
   for (int axis = 0; axis < 3; ++axis) {
-    planes_[static_cast<std::size_t>(plane_count_++)] = {Vertex::Unit(axis), hull_box_.max[axis]};
-    planes_[static_cast<std::size_t>(plane_count_++)] = {-Vertex::Unit(axis), -hull_box_.min[axis]};
+    planes_[static_cast<std::size_t>(plane_count_++)] = {Vertex::Unit(axis), hull_box.max[axis]};
+    planes_[static_cast<std::size_t>(plane_count_++)] = {-Vertex::Unit(axis), -hull_box.min[axis]};
   }
   // The hull's side faces: planes through the apex and each silhouette edge of the box, an
   // edge between a face turned towards the apex and one turned away. The offset is taken

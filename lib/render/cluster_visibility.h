@@ -30,7 +30,6 @@ class Shaft {
  public:
   Shaft(const Vertex& apex, const BoundingBox& box);
   const Vertex& apex() const { return points_[0]; }
-  const BoundingBox& box() const { return box_; }
   const std::array<Vertex, 9>& points() const { return points_; }
 
   /// Whether `box` lies beyond one of the shaft's planes by more than `margin`.
@@ -44,7 +43,6 @@ class Shaft {
 
  private:
   std::array<Vertex, 9> points_;
-  BoundingBox box_, hull_box_;
   // Unit normal, offset: n . p <= offset for the nine points. At most 6 axis planes and 6
   // silhouette edges (a box seen from outside has at most 6).
   std::array<std::pair<Vertex, double>, 18> planes_;

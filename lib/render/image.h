@@ -10,6 +10,10 @@
 
 namespace visproxy {
 
+/// The mean of a colour's channels: the brightness figures (error bounds, clamped energy,
+/// relative errors) are taken on.
+inline double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
+
 struct Image {
   int width = 0;
   int height = 0;

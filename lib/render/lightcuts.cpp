@@ -5,12 +5,11 @@
 #include <numbers>
 #include <numeric>
 
+#include "visproxy/render/image.h"
 #include "visproxy/render/sampling.h"
 
 namespace visproxy {
 namespace {
-
-double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
 
 // Van der Corput's radical inverse in base 2.
 double radical_inverse(std::uint32_t bits) {
@@ -94,7 +93,7 @@ std::vector<PointLight> vpl_point_lights(const RenderWorld& world, const std::ve
     point.normal = light.normal;
     point.intensity = light.power.cwiseProduct(light.brdf);
     point.max_geometric = max_geometric;
-    point.end = segment_end(world, light.position, light.normal, light.position + light.normal, light.distance);
+    point.end = vpl_connection_end(world, light);
     point.end_offset = (point.end - light.position).norm();
     points.push_back(point);
   }
@@ -190,11 +189,7 @@ ClusterGeometry cluster_geometry(const LightTree::Node& node, const Vertex& x, c
   const Vertex nearest = x.cwiseMax(node.box.min).cwiseMin(node.box.max);
   const double d_min = (nearest - x).norm();
   double d_max = 0;
-  for (int k = 0; k < 8; ++k) {
-    const Vertex c(k & 1 ? node.box.max.x() : node.box.min.x(), k & 2 ? node.box.max.y() : node.box.min.y(),
-                   k & 4 ? node.box.max.z() : node.box.min.z());
-    d_max = std::max(d_max, (c - x).norm());
-  }
+  for (int k = 0; k < 8; ++k) d_max = std::max(d_max, (box_corner(node.box, k) - x).norm());
   double cos_x_lo = 0, cos_x_hi = 1, cos_l_lo = 0, cos_l_hi = 1;
   if (distance > radius) {
     // Directions from x to the box lie within beta of v; from the box to x within beta of -v.

@@ -640,10 +640,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
         w.convex[w.outside].push_back({id, it->second->transformed(instance.transform).grown(pad_world)});
       else
         w.add_instance(w.outside, mesh_scene(instance.mesh), object_to_world, id, mask);
-      if (w.keep_solids) {
-        solids.outside = solids.mesh;
-        if (it->second) keep_planes(*it->second);
-      }
+      if (w.keep_solids && it->second) keep_planes(*it->second);
     }
 
     // Inside (bounds): only a usable one; traced (balls are solids), never clipped.

@@ -89,8 +89,8 @@ struct RenderWorldOptions {
 struct InstanceSolids {
   double pad = 0;      ///< world units
   TriangleMesh mesh;   ///< the instance's own triangles
-  /// Triangles whose solid holds the mesh: its outside proxy (proved, and usable by bounds)
-  /// or the mesh itself (`outside_is_mesh`). A shaft that meets none of them misses the
+  /// Triangles whose solid holds the mesh: its outside proxy (proved, and usable by bounds);
+  /// empty when the mesh is its own outside solid (`outside_is_mesh`: use `mesh`). A shaft that meets none of them misses the
   /// mesh only if the shaft holds a point outside that solid: a convex solid (`outside_planes`
   /// not empty: its face planes, outward unit normals) shows it by a plane, a traced proxy
   /// by a point on a light (`lights_outside_outside`: every light lies outside its solid).

@@ -44,6 +44,10 @@ std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, co
   return lights;
 }
 
+Vertex vpl_connection_end(const RenderWorld& world, const VirtualPointLight& light) {
+  return segment_end(world, light.position, light.normal, light.position + light.normal, light.distance);
+}
+
 double scene_diagonal(const Scene& scene, const RenderWorld& world) {
   BoundingBox box;
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {

@@ -39,6 +39,11 @@ struct VplOptions {
 /// stream (seed, i): the lights do not depend on the number of threads.
 std::vector<VirtualPointLight> trace_virtual_point_lights(const Scene& scene, const RenderWorld& world, const VplOptions& options);
 
+/// The end of every connection to `light`: moved off its surface towards the side its
+/// normal faces, the side connections reach it from (vpl_geometry), so the same for every
+/// shading point.
+Vertex vpl_connection_end(const RenderWorld& world, const VirtualPointLight& light);
+
 /// The diagonal of the box holding every instance (as RenderWorld bounds it) and every
 /// light: the length VPL clamps are relative to. World units.
 double scene_diagonal(const Scene& scene, const RenderWorld& world);

@@ -38,6 +38,13 @@ struct IntegratorContext {
 /// area lights give `point`.
 Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility);
 
+/// The VPLs an integrator shades: context.options.virtual_point_lights when given, else
+/// those its light paths leave (vpls, bounces, vpl_seed).
+std::vector<VirtualPointLight> integrator_vpls(const IntegratorContext& context);
+/// The clamp of the VPLs' geometric term for a clamp distance: 1 / distance^2, or no clamp
+/// (infinity) for 0.
+double vpl_max_geometric(double clamp_distance);
+
 /// Direct illumination from the area lights (Billen et al. eq. 21): M light samples by area.
 std::unique_ptr<Integrator> make_direct_integrator(const IntegratorContext& context);
 /// Instant radiosity: M light samples plus every virtual point light.

@@ -9,7 +9,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <vector>
 
@@ -39,14 +38,9 @@ std::vector<PointLight> lightcut_lights(const IntegratorContext& context, std::s
   vpls = 0;
   clamp_distance = 0;
   if (options.lightcut_vpls) {
-    const std::vector<VirtualPointLight> traced =
-        options.virtual_point_lights
-            ? *options.virtual_point_lights
-            : trace_virtual_point_lights(context.scene, context.world,
-                                         {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
+    const std::vector<VirtualPointLight> traced = integrator_vpls(context);
     clamp_distance = options.vpl_clamp * scene_diagonal(context.scene, context.world);
-    const double max_geometric = clamp_distance > 0 ? 1 / (clamp_distance * clamp_distance) : std::numeric_limits<double>::infinity();
-    for (PointLight& light : vpl_point_lights(context.world, traced, max_geometric)) lights.push_back(light);
+    for (PointLight& light : vpl_point_lights(context.world, traced, vpl_max_geometric(clamp_distance))) lights.push_back(light);
     vpls = traced.size();
   }
   return lights;

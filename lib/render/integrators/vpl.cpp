@@ -14,8 +14,6 @@
 namespace visproxy {
 namespace {
 
-double luminance(const Color& c) { return (c.x() + c.y() + c.z()) / 3; }
-
 // Orders the lights along a Morton curve over their bounding box (ties kept in order), so
 // that neighbours in the list lie near each other: a shading point's connections to a run
 // of them leave in similar directions, which lets occluder disks reject clusters for whole
@@ -54,26 +52,19 @@ class VplIntegrator final : public Integrator {
  public:
   explicit VplIntegrator(const IntegratorContext& context) : context_(context) {
     const RenderOptions& options = context.options;
-    if (options.virtual_point_lights) {
-      lights_ = *options.virtual_point_lights;
-      given_ = true;
-    } else {
-      lights_ = trace_virtual_point_lights(context.scene, context.world,
-                                           {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
-    }
+    lights_ = integrator_vpls(context);
+    given_ = options.virtual_point_lights != nullptr;
     sort_spatially(lights_);
     arrays_ = VplArrays(lights_);
     for (const VirtualPointLight& light : lights_) {
       intensity_.push_back(light.power.cwiseProduct(light.brdf));
       intensity_luminance_.push_back(luminance(intensity_.back()));
-      // A connection reaches a VPL from the side its normal faces (vpl_geometry), so its
-      // end, moved off the surface towards that side, is the same for every shading point.
-      ends_.push_back(segment_end(context.world, light.position, light.normal, light.position + light.normal, light.distance));
+      ends_.push_back(vpl_connection_end(context.world, light));
       end_shells_.push_back(context.world.convex_shells_holding(ends_.back()));
     }
     diagonal_ = scene_diagonal(context.scene, context.world);
     clamp_distance_ = options.vpl_clamp * diagonal_;
-    max_geometric_ = clamp_distance_ > 0 ? 1 / (clamp_distance_ * clamp_distance_) : std::numeric_limits<double>::infinity();
+    max_geometric_ = vpl_max_geometric(clamp_distance_);
     const std::size_t pixels = static_cast<std::size_t>(context.scene.camera.width) * static_cast<std::size_t>(context.scene.camera.height);
     energy_.assign(pixels, 0.0);
     dropped_.assign(pixels, 0.0);
@@ -168,6 +159,16 @@ class VplIntegrator final : public Integrator {
 };
 
 }  // namespace
+
+std::vector<VirtualPointLight> integrator_vpls(const IntegratorContext& context) {
+  const RenderOptions& options = context.options;
+  if (options.virtual_point_lights) return *options.virtual_point_lights;
+  return trace_virtual_point_lights(context.scene, context.world, {.paths = options.vpls, .bounces = options.bounces, .seed = options.vpl_seed});
+}
+
+double vpl_max_geometric(double clamp_distance) {
+  return clamp_distance > 0 ? 1 / (clamp_distance * clamp_distance) : std::numeric_limits<double>::infinity();
+}
 
 std::unique_ptr<Integrator> make_vpl_integrator(const IntegratorContext& context) {
   return std::make_unique<VplIntegrator>(context);
