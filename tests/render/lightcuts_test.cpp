@@ -501,6 +501,26 @@ TEST(Lightcuts, BlackLightsAroundThePointLeaveTheCutExact) {
   EXPECT_LE((cut.radiance - expected).norm(), 1e-12 * expected.norm());
 }
 
+// A light inside the table top (a hostile scene: the table's inside proxy would "prove"
+// every segment to it blocked, and its bounding box holds the light): the world drops what
+// no longer proves, and every proof left still agrees with the traced representatives.
+TEST(Lightcuts, ALightInsideAProxyIsNotProvedAround) {
+  Room room = furnished_room(Vertex::Zero(), false, 64, 48);
+  AreaLight inside;
+  inside.radiance = Color::Constant(5);
+  inside.triangles = {{Vertex(-0.1, 0.72, -0.1), Vertex(0.1, 0.72, -0.1), Vertex(0.1, 0.72, 0.1)},
+                      {Vertex(-0.1, 0.72, -0.1), Vertex(0.1, 0.72, 0.1), Vertex(-0.1, 0.72, 0.1)}};
+  room.scene.lights.push_back(inside);
+  const RenderWorld world(room.scene, room.proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
+  ASSERT_FALSE(world.notes().empty());
+  EXPECT_TRUE(world.instance_solids(1).inside.triangles.empty());  // the table's
+  RenderOptions options{.integrator = IntegratorKind::lightcuts, .spp = 1, .seed = 6, .light_points = 128};
+  options.lightcut = {.error = 0.02, .max_cut = 1000, .bounds = VisibilityBounds::both, .check_proofs = true};
+  const RenderResult result = render(room.scene, world, options);
+  EXPECT_EQ(result.stats.integrator["proof_disagreements"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(result.stats.integrator["clusters_proved_unoccluded"].get<std::uint64_t>(), 100u);
+}
+
 TEST(Lightcuts, ImagesDoNotDependOnTheNumberOfThreads) {
   const Room room = furnished_room(Vertex::Zero(), false, 80, 56);  // 5 x 4 tiles
   const RenderWorld world(room.scene, room.proxies, {.counting = false, .ray_masks = true, .keep_solids = true});
