@@ -100,7 +100,7 @@ std::vector<PointLight> vpl_point_lights(const RenderWorld& world, const std::ve
   return points;
 }
 
-LightTree::LightTree(std::vector<PointLight> lights, std::uint64_t seed) : lights_(std::move(lights)) {
+LightTree::LightTree(std::vector<PointLight> lights) : lights_(std::move(lights)) {
   if (lights_.empty()) return;
   std::vector<std::uint32_t> order(lights_.size());
   std::iota(order.begin(), order.end(), 0u);
@@ -132,7 +132,7 @@ LightTree::LightTree(std::vector<PointLight> lights, std::uint64_t seed) : light
       if (node.cos_half <= -1 + 1e-12) node.cos_half = -1;
     }
     if (end - begin == 1) {
-      node.representative = order[begin];
+      node.representative = node.central = order[begin];
       nodes_[index] = node;
       return;
     }
@@ -159,11 +159,35 @@ LightTree::LightTree(std::vector<PointLight> lights, std::uint64_t seed) : light
     node.left = left, node.right = left + 1;
     self(self, static_cast<std::size_t>(left), begin, middle);
     self(self, static_cast<std::size_t>(left + 1), middle, end);
-    const Node& l = nodes_[static_cast<std::size_t>(left)];
-    const Node& r = nodes_[static_cast<std::size_t>(left + 1)];
-    const double wl = std::max(0.0, luminance(l.intensity)), wr = std::max(0.0, luminance(r.intensity));
-    PixelRandom random(seed ^ kLightPathStream, index, 2);
-    node.representative = wl + wr > 0 && random.uniform() * (wl + wr) >= wl ? r.representative : l.representative;
+    // Two representatives, both by the luminance-weighted centroid of the cluster's lights
+    // (ties to the lower index):
+    //  - `central`, the light nearest it (a midpoint rule over the cluster), for clusters
+    //    whose visibility is proved, where any light costs the same: no ray;
+    //  - `representative`, the child's representative nearer it, for traced clusters: one
+    //    child keeps it, and its traced answer (Walter et al. pick between the children's
+    //    at random by intensity).
+    Vertex centroid = Vertex::Zero();
+    double weight = 0;
+    for (std::size_t k = begin; k < end; ++k) {
+      const double w = std::max(0.0, luminance(lights_[order[k]].intensity));
+      centroid += w * lights_[order[k]].position, weight += w;
+    }
+    if (!(weight > 0)) {  // black lights: the plain centroid
+      centroid = Vertex::Zero();
+      for (std::size_t k = begin; k < end; ++k) centroid += lights_[order[k]].position;
+      weight = static_cast<double>(end - begin);
+    }
+    centroid /= weight;
+    auto nearer = [&](std::uint32_t a, std::uint32_t b) {  // a nearer the centroid than b
+      const double da = (lights_[a].position - centroid).squaredNorm(), db = (lights_[b].position - centroid).squaredNorm();
+      return da < db || (da == db && a < b);
+    };
+    node.central = order[begin];
+    for (std::size_t k = begin + 1; k < end; ++k)
+      if (nearer(order[k], node.central)) node.central = order[k];
+    const std::uint32_t a = nodes_[static_cast<std::size_t>(left)].representative;
+    const std::uint32_t b = nodes_[static_cast<std::size_t>(left + 1)].representative;
+    node.representative = nearer(b, a) ? b : a;
     nodes_[index] = node;
   };
   nodes_.emplace_back();
@@ -249,7 +273,6 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
     Entry entry;
     entry.node = index;
     const ClusterGeometry g = node.lights == 1 ? ClusterGeometry{} : cluster_geometry(node, x, n);
-    const double rep_g = light_geometry(lights[node.representative], x, n);
     if (node.lights > 1 && !(g.upper > 0)) return entry;  // contributes nothing: no ray, no error
     bool unoccluded = parent_unoccluded, occluded = false;
     if (node.lights > 1 && !unoccluded && (upper || lower) &&
@@ -269,11 +292,14 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
       result.proved_unoccluded += unoccluded ? 1 : 0;
     }
     entry.proved_unoccluded = unoccluded;
+    // A cluster proved unoccluded is shaded by its central light: it needs no ray.
+    const std::uint32_t shading = unoccluded ? node.central : node.representative;
+    const double rep_g = light_geometry(lights[shading], x, n);
     if (occluded) entry.visibility = 0;
     else if (unoccluded) entry.visibility = 1;
     else if (node.representative == parent_rep && parent_visibility >= 0) entry.visibility = parent_visibility;
     else if (rep_g > 0) entry.visibility = trace(node.representative);
-    if (options.check_proofs && (occluded || unoccluded) && blocked(node.representative) == (entry.visibility == 1))
+    if (options.check_proofs && (occluded || unoccluded) && blocked(shading) == (entry.visibility == 1))
       ++result.disagreements;
     if (entry.visibility > 0) entry.estimate = brdf.cwiseProduct(node.intensity) * rep_g;
     // (A black cluster has no error, even where its geometric bound is infinite.)

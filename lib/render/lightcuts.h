@@ -49,8 +49,8 @@ std::vector<PointLight> vpl_point_lights(const RenderWorld& world, const std::ve
 
 /// The light tree: a binary tree over the lights, points on area lights apart from VPLs at
 /// the first split, then split at the median of the longest axis of each node's box; each node holds its lights' box (grown by their end offsets), the
-/// cone of their normals, their total intensity and a representative light, chosen among
-/// its children's with probability proportional to their luminance (seeded).
+/// cone of their normals, their total intensity and two representative lights chosen by the
+/// luminance-weighted centroid of its lights (deterministic; see `central`).
 class LightTree {
  public:
   struct Node {
@@ -58,14 +58,15 @@ class LightTree {
     Vertex axis = Vertex::Zero();  ///< of the normals' cone
     double cos_half = -1;          ///< cone half-angle's cosine; -1: no bound (two-sided lights among them)
     Color intensity = Color::Zero();
-    std::uint32_t representative = 0;  ///< a light index
+    std::uint32_t representative = 0;  ///< a light index: the one traced for the cluster
+    std::uint32_t central = 0;         ///< the light nearest the cluster's centroid: shades it where visibility is proved
     std::int32_t left = -1, right = -1;  ///< children; -1 for a leaf (one light)
     std::uint32_t lights = 0;           ///< how many lights it holds
     bool on_lights = true;               ///< every light lies on an area light
     double max_geometric = 0;            ///< the largest clamp of its lights
     double min_geometric = 0;            ///< the smallest
   };
-  LightTree(std::vector<PointLight> lights, std::uint64_t seed);
+  explicit LightTree(std::vector<PointLight> lights);
   const std::vector<PointLight>& lights() const { return lights_; }
   const std::vector<Node>& nodes() const { return nodes_; }
   bool empty() const { return lights_.empty(); }

@@ -246,7 +246,7 @@ TEST(LightTree, NodesHoldTheirLightsAndSumTheirIntensity) {
   for (const PointLight& l : lights) total += l.intensity;
   // K points carry the light's power: radiance x area (1 x 0.8 m).
   EXPECT_NEAR(total.x(), 14 * 0.8, 1e-9);
-  const LightTree tree(lights, 5);
+  const LightTree tree(lights);
   const auto& nodes = tree.nodes();
   std::vector<int> seen(lights.size(), 0);
   auto visit = [&](auto& self, std::int32_t index) -> std::vector<std::uint32_t> {
@@ -272,6 +272,23 @@ TEST(LightTree, NodesHoldTheirLightsAndSumTheirIntensity) {
     }
     EXPECT_LT((sum - node.intensity).norm(), 1e-9 * sum.norm());
     EXPECT_NE(std::find(members.begin(), members.end(), node.representative), members.end());
+    // The central light is the member nearest the luminance-weighted centroid; the traced
+    // representative is one of the children's, so that one child keeps its answer.
+    Vertex centroid = Vertex::Zero();
+    double weight = 0;
+    for (const std::uint32_t m : members) centroid += luminance(lights[m].intensity) * lights[m].position, weight += luminance(lights[m].intensity);
+    centroid /= weight;
+    for (const std::uint32_t m : members)
+      EXPECT_LE((lights[node.central].position - centroid).norm(), (lights[m].position - centroid).norm());
+    if (node.left >= 0) {
+      const std::uint32_t l = nodes[static_cast<std::size_t>(node.left)].representative;
+      const std::uint32_t r = nodes[static_cast<std::size_t>(node.right)].representative;
+      EXPECT_TRUE(node.representative == l || node.representative == r);
+      EXPECT_LE((lights[node.representative].position - centroid).norm(),
+                (lights[node.representative == l ? r : l].position - centroid).norm());
+    } else {
+      EXPECT_EQ(node.central, node.representative);
+    }
     return members;
   };
   visit(visit, 0);
@@ -291,7 +308,7 @@ TEST(LightTree, ClusterGeometryBoundsEveryLight) {
     l.max_geometric = i % 3 == 0 ? 4.0 : std::numeric_limits<double>::infinity();
     lights.push_back(l);
   }
-  const LightTree tree(lights, 1);
+  const LightTree tree(lights);
   int checked = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const Vertex x(2 * u(random), 1.5 * u(random), 2 * u(random));
@@ -358,7 +375,7 @@ void expect_error_zero_is_brute_force(const Vertex& offset, bool balls) {
   for (const PointLight& vpl : vpl_point_lights(world, trace_virtual_point_lights(room.scene, world, {.paths = 64, .bounces = 1, .seed = 3}), 40.0))
     lights.push_back(vpl);
   ASSERT_GT(lights.size(), 140u);
-  const LightTree tree(lights, 2);
+  const LightTree tree(lights);
   const ClusterProofs proofs(world, room.scene.instances.size());
   CutEvaluator plain(tree, nullptr), bounded(tree, &proofs);
   const Color brdf(0.2, 0.15, 0.1);
@@ -487,7 +504,7 @@ TEST(Lightcuts, BlackLightsAroundThePointLeaveTheCutExact) {
   };
   for (int i = 0; i < 8; ++i) add(Vertex(i & 1 ? 0.1 : -0.1, i & 2 ? 0.1 : -0.1, i & 4 ? 0.1 : -0.1), 0.0);
   for (int i = 0; i < 8; ++i) add(Vertex(3 + 0.3 * i, 2, 0.1 * i), 1.0 + i);  // the first split parts them from the black ones
-  const LightTree tree(lights, 1);
+  const LightTree tree(lights);
   SurfaceHit hit;
   hit.position = Vertex::Zero();
   hit.normal = Vertex(0, 1, 0);

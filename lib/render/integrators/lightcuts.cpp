@@ -49,7 +49,7 @@ std::vector<PointLight> lightcut_lights(const IntegratorContext& context, std::s
 class LightcutsIntegrator final : public Integrator {
  public:
   explicit LightcutsIntegrator(const IntegratorContext& context)
-      : context_(context), tree_(lightcut_lights(context, area_points_, vpls_, clamp_distance_), context.options.seed) {
+      : context_(context), tree_(lightcut_lights(context, area_points_, vpls_, clamp_distance_)) {
     if (context.options.lightcut.bounds != VisibilityBounds::none) {
       if (!context.world.keeps_solids())
         throw Error("lightcuts: visibility bounds need a render world made with keep_solids (RenderWorldOptions)");
