@@ -396,16 +396,21 @@ Polytope polytope_of_planes(const std::vector<Plane>& planes, const Vertex& cent
   return polytope;
 }
 
-// Planes of the triangles that some point is strictly outside of, decided exactly.
-std::vector<PlaneIndex> planes_leaving_points_outside(const Polytope& polytope, const std::vector<Point>& points) {
+// Planes of the triangles that some point is not strictly inside of (outside, or on the
+// plane), decided exactly. Strictly: a point on a plane would let the input's triangles
+// touch the output, which the corners' rounding keeps from being exactly convex, and then
+// no exact check could prove the input contained. Degenerate (collinear) triangles bound
+// nothing and are skipped.
+std::vector<PlaneIndex> planes_not_strictly_holding(const Polytope& polytope, const std::vector<Point>& points) {
   std::vector<PlaneIndex> planes;
   for (std::size_t t = 0; t < polytope.mesh.triangles.size(); ++t) {
     const Triangle& triangle = polytope.mesh.triangles[t];
     const Point a = cgal_point(polytope.mesh.positions[triangle[0]]);
     const Point b = cgal_point(polytope.mesh.positions[triangle[1]]);
     const Point c = cgal_point(polytope.mesh.positions[triangle[2]]);
+    if (CGAL::collinear(a, b, c)) continue;
     for (const Point& p : points)
-      if (CGAL::orientation(a, b, c, p) == CGAL::POSITIVE) {
+      if (CGAL::orientation(a, b, c, p) != CGAL::NEGATIVE) {
         planes.push_back(polytope.plane_of_triangle[t]);
         break;
       }
@@ -503,7 +508,7 @@ BoundedHullResult build_bounded_hull(const TriangleMesh& mesh, const BoundedHull
     plane.offset = support - plane.normal.dot(center);
   }
 
-  // Build, check exactly, push the planes that leave a vertex outside, repeat.
+  // Build, check exactly, push the planes that leave a vertex outside or on them, repeat.
   std::vector<Point> hull_points;
   hull_points.reserve(exact.mesh.positions.size());
   for (const Vertex& p : exact.mesh.positions) hull_points.push_back(cgal_point(p));
@@ -513,7 +518,7 @@ BoundedHullResult build_bounded_hull(const TriangleMesh& mesh, const BoundedHull
                 (box.diagonal() + std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()));
   for (int round = 0;; ++round) {
     Polytope polytope = polytope_of_planes(kept, center);
-    const std::vector<PlaneIndex> outside = planes_leaving_points_outside(polytope, hull_points);
+    const std::vector<PlaneIndex> outside = planes_not_strictly_holding(polytope, hull_points);
     if (outside.empty()) {
       result.mesh = std::move(polytope.mesh);
       result.faces = polytope.faces;

@@ -39,11 +39,13 @@ struct BoundedHullResult {
 /// exactly). Removing a half-space only grows the polytope, so it contains the hull. The
 /// kept planes are then moved out to touch the hull vertices, the polytope's corners are
 /// computed exactly from the planes and rounded to double, and containment is checked with
-/// exact predicates on the output triangles: every input vertex must be on the inner side
-/// of, or on, the plane of every output triangle. Where rounding left a vertex outside, the
-/// offending planes are moved outward by a few units in the last place of the coordinates
-/// (doubled each round) and the check is repeated until it passes, so the returned mesh
-/// always contains every input vertex, exactly.
+/// exact predicates on the output triangles: every input vertex must lie strictly on the
+/// inner side of the plane of every (non-degenerate) output triangle. Where rounding left a
+/// vertex outside or on a plane, the offending planes are moved outward by a few units in
+/// the last place of the coordinates (doubled each round) and the check is repeated until
+/// it passes, so the returned mesh contains every input vertex strictly and no input
+/// triangle touches it: `verify` proves it without relying on the output's convexity,
+/// which the rounding of its corners breaks.
 ///
 /// Where more than three kept planes meet at one point (often at a hull vertex), the
 /// rounded planes meet in several corners a rounding error apart: the mesh then has tiny

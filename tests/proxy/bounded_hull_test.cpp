@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/convex_hull.h"
+#include "visproxy/verify/containment.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"
@@ -160,6 +163,60 @@ TEST(BoundedHull, TriangleSoupGivesTheSameBound) {
 TEST(BoundedHull, NonManifoldInput) {
   const TriangleMesh pig = read_mesh(testing::cgal_mesh("pig.stl"));
   expect_valid(build_bounded_hull(pig, {.max_faces = 18}), pig, 18);
+}
+
+// A prism of 40 sides: its hull has 42 faces, and hull:32 keeps the two caps, planes the
+// mesh's own cap triangles lie in. Were the kept planes left touching the mesh, the mesh's
+// caps would meet the proxy's, and the proxy (convex only up to the rounding of its corners)
+// could not be proved to contain them: verify's exact check, as a user runs it, must hold.
+TEST(BoundedHull, PlanesThroughTheMeshsOwnFacesStillVerify) {
+  for (const double scale : {1.0, 1e-3, 1e4}) {
+    for (const Vertex offset : {Vertex(0, 0, 0), Vertex(2.5e5, -1.25e5, 3e4)}) {
+      SCOPED_TRACE("scale " + std::to_string(scale) + ", offset " + std::to_string(offset.x()));
+      constexpr int kSides = 40;
+      // Tilted, so that no plane is an axis plane whose corners round onto it exactly.
+      const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized()).toRotationMatrix();
+      auto place = [&](const Vertex& p) { return Vertex(offset + scale * (tilt * p)); };
+      TriangleMesh prism;
+      for (int z = 0; z < 2; ++z)
+        for (int i = 0; i < kSides; ++i) {
+          const double angle = 2 * 3.14159265358979323846 * i / kSides + 0.1;
+          prism.positions.push_back(place(Vertex(std::cos(angle), std::sin(angle) * 0.7, 0.37 * z)));
+        }
+      const auto bottom_centre = static_cast<std::uint32_t>(prism.positions.size());
+      prism.positions.push_back(place(Vertex(0, 0, 0)));
+      prism.positions.push_back(place(Vertex(0, 0, 0.37)));
+      for (std::uint32_t i = 0; i < kSides; ++i) {
+        const std::uint32_t j = (i + 1) % kSides;
+        prism.triangles.push_back({i, j, j + kSides});
+        prism.triangles.push_back({i, j + kSides, i + kSides});
+        prism.triangles.push_back({bottom_centre, j, i});
+        prism.triangles.push_back({bottom_centre + 1, i + kSides, j + kSides});
+      }
+      const BoundedHullResult result = build_bounded_hull(prism, {.max_faces = 32});
+      ASSERT_LE(result.faces, 32u);
+      const Containment proof = check_containment(result.mesh, prism, {.check_surface = true});
+      EXPECT_TRUE(proof.contained()) << proof.vertices_outside << " vertices outside, " << proof.triangles_touching
+                                     << " triangles touching";
+      EXPECT_LT(result.added_volume_fraction(), 0.05);
+    }
+  }
+}
+
+// Two of libcgal-demo's meshes whose hull:32 failed verify before its planes were kept off
+// the mesh's vertices: many planes meet at their corners, and the rounded corners left
+// sliver triangles touching the mesh's faces.
+TEST(BoundedHull, CgalMeshesWhosePlanesMeetManyAtACornerVerify) {
+  for (const char* name : {"tripod.off", "three_peaks.off"}) {
+    SCOPED_TRACE(name);
+    const TriangleMesh mesh = read_mesh(testing::cgal_mesh(name));
+    ASSERT_GT(build_convex_hull(mesh).faces, 32u);  // else the exact hull is returned
+    const BoundedHullResult result = build_bounded_hull(mesh, {.max_faces = 32});
+    const Containment proof = check_containment(result.mesh, mesh, {.check_surface = true});
+    EXPECT_TRUE(proof.contained()) << proof.vertices_outside << " vertices outside, " << proof.triangles_touching
+                                   << " triangles touching";
+    EXPECT_EQ(proof.vertices_on_boundary, 0u);
+  }
 }
 
 TEST(BoundedHull, IsDeterministic) {
