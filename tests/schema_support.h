@@ -18,12 +18,17 @@ inline nlohmann::json read_schema(const std::string& name) {
 
 /// A structural check of `value` against `part` of `schema`: every required key present,
 /// every key of an object described (by "properties" or "additionalProperties"), constants
-/// and enumerations matched, arrays' items checked, "$ref"s within the schema followed.
+/// and enumerations matched, arrays' items checked, "$ref"s followed (within the schema, or
+/// to another schema file of data/schemas named by its file name).
 /// Alternatives ("oneOf") are not descended into.
 inline void expect_described(const nlohmann::json& value, const nlohmann::json& schema, const nlohmann::json& part,
                              const std::string& where) {
   if (part.contains("$ref")) {
-    const std::string ref = part.at("$ref");  // "#/$defs/NAME"
+    const std::string ref = part.at("$ref");  // "#/$defs/NAME", or another schema of data/schemas by file name
+    if (ref.rfind("#", 0) != 0) {
+      const nlohmann::json other = read_schema(ref);
+      return expect_described(value, other, other, where);
+    }
     return expect_described(value, schema, schema.at("$defs").at(ref.substr(ref.rfind('/') + 1)), where);
   }
   if (part.contains("const")) {

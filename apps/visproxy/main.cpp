@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   add_render_command(app, exit_code);
   add_generate_command(app, exit_code);
   add_compare_command(app, exit_code);
+  add_batch_command(app, exit_code);
 
   if (const std::optional<std::string> word = unknown_subcommand(app, argc, argv)) {
     std::cerr << "visproxy: " << unknown_subcommand_message(app, *word) << "\n";

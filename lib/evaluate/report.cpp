@@ -32,20 +32,6 @@ double number(const json& object, std::initializer_list<const char*> path, doubl
   return node && node->is_number() ? node->get<double>() : missing;
 }
 
-std::string escape_html(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 // One table cell: the text a person reads and the number the table sorts by.
 struct Cell {
   std::string text;
@@ -244,8 +230,23 @@ std::string report_markdown(const json& manifest) {
   return md;
 }
 
-std::string report_html(const json& manifest) {
-  const std::string title = "visproxy report: " + manifest.at("mesh").value("path", "?");
+std::string escape_html(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string sortable_table_page(const std::string& title, const std::string& before_table,
+                                const std::vector<std::string>& headers, const std::vector<std::vector<HtmlCell>>& rows,
+                                const std::string& after_table) {
   std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" + escape_html(title) +
                      "</title>\n<style>\n"
                      "body { font-family: sans-serif; margin: 2em; color: #222; }\n"
@@ -257,32 +258,26 @@ std::string report_html(const json& manifest) {
                      "td.fails { color: #b00; font-weight: bold; }\n"
                      "p.notes { max-width: 60em; font-size: 13px; color: #444; }\n"
                      "</style>\n</head>\n<body>\n";
-  html += "<h1>" + escape_html(title) + "</h1>\n";
-  html += "<p>Mesh: " + escape_html(mesh_summary(manifest)) + ".</p>\n<p>" + escape_html(ray_summary(manifest)) + "</p>\n";
-  html += "<table id=\"proxies\">\n<thead><tr>";
-  for (const std::string& h : headers()) html += "<th>" + escape_html(h) + "</th>";
+  html += "<h1>" + escape_html(title) + "</h1>\n" + before_table;
+  html += "<table id=\"sortable\">\n<thead><tr>";
+  for (const std::string& h : headers) html += "<th>" + escape_html(h) + "</th>";
   html += "</tr></thead>\n<tbody>\n";
-  for (const json& entry : manifest.at("proxies")) {
+  for (const std::vector<HtmlCell>& cells : rows) {
     html += "<tr>";
-    std::size_t column = 0;
-    for (const Cell& cell : row(entry)) {
-      std::string cls = column >= 2 && column != 4 && column != 9 ? "number" : "";
-      if (cell.text == "FAILS") cls = "fails";
+    for (const HtmlCell& cell : cells) {
+      const std::string cls = !cell.css_class.empty() ? cell.css_class : cell.number ? "number" : "";
+      const std::string text = cell.link.empty() ? escape_html(cell.text)
+                                                 : "<a href=\"" + escape_html(cell.link) + "\">" + escape_html(cell.text) + "</a>";
       html += "<td" + (cls.empty() ? std::string() : " class=\"" + cls + "\"") + " data-sort=\"" +
-              (std::isnan(cell.sort_value) ? escape_html(cell.text) : format("%.17g", cell.sort_value)) + "\">" +
-              escape_html(cell.text) + "</td>";
-      ++column;
+              (std::isnan(cell.sort_value) ? escape_html(cell.text) : format("%.17g", cell.sort_value)) + "\">" + text + "</td>";
     }
     html += "</tr>\n";
   }
-  html += "</tbody>\n</table>\n<p class=\"notes\">" + escape_html(kColumnNotes) + " Click a column header to sort.</p>\n";
-  html += "<figure>\n" + f_miss_plot_svg(manifest) + "</figure>\n";
-  html += "<p class=\"notes\">Written by " + escape_html(manifest.value("generator", std::string("visproxy"))) +
-          " from manifest.json.</p>\n";
+  html += "</tbody>\n</table>\n" + after_table;
   html +=
       "<script>\n"
       "(function () {\n"
-      "  const table = document.getElementById('proxies');\n"
+      "  const table = document.getElementById('sortable');\n"
       "  const headers = table.tHead.rows[0].cells;\n"
       "  const key = (row, column) => {\n"
       "    const text = row.cells[column].dataset.sort;\n"
@@ -307,6 +302,29 @@ std::string report_html(const json& manifest) {
       "})();\n"
       "</script>\n</body>\n</html>\n";
   return html;
+}
+
+std::string report_html(const json& manifest) {
+  const std::string title = "visproxy report: " + manifest.at("mesh").value("path", "?");
+  std::vector<std::vector<HtmlCell>> rows;
+  for (const json& entry : manifest.at("proxies")) {
+    std::vector<HtmlCell> cells;
+    std::size_t column = 0;
+    for (const Cell& cell : row(entry)) {
+      HtmlCell html_cell;
+      html_cell.text = cell.text, html_cell.sort_value = cell.sort_value, html_cell.number = column >= 2 && column != 4 && column != 9;
+      if (cell.text == "FAILS") html_cell.css_class = "fails";
+      cells.push_back(std::move(html_cell));
+      ++column;
+    }
+    rows.push_back(std::move(cells));
+  }
+  const std::string before = "<p>Mesh: " + escape_html(mesh_summary(manifest)) + ".</p>\n<p>" + escape_html(ray_summary(manifest)) + "</p>\n";
+  const std::string after = "<p class=\"notes\">" + escape_html(kColumnNotes) + " Click a column header to sort.</p>\n" +
+                            "<figure>\n" + f_miss_plot_svg(manifest) + "</figure>\n" +
+                            "<p class=\"notes\">Written by " + escape_html(manifest.value("generator", std::string("visproxy"))) +
+                            " from manifest.json.</p>\n";
+  return sortable_table_page(title, before, headers(), rows, after);
 }
 
 void write_report(const std::filesystem::path& folder, const json& manifest) {

@@ -3,7 +3,9 @@
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <cmath>
 #include <string>
+#include <vector>
 
 namespace visproxy {
 
@@ -20,6 +22,26 @@ std::string report_html(const nlohmann::json& manifest);
 /// one point per measured proxy, coloured by kind; a note instead of points when no
 /// proxy has been measured.
 std::string f_miss_plot_svg(const nlohmann::json& manifest);
+
+/// Text with the characters HTML reserves (< > & ") escaped.
+std::string escape_html(const std::string& text);
+
+/// One cell of a sortable HTML table: the text a person reads, the number it sorts by (NaN:
+/// by the text), right-aligned when a number, an optional CSS class ("fails") and link.
+struct HtmlCell {
+  std::string text;
+  double sort_value = std::nan("");
+  bool number = false;
+  std::string css_class;
+  std::string link;
+};
+
+/// A self-contained HTML page (no external file, script or font): the title, the HTML
+/// before the table, a table sortable by any column (click a header; the table's
+/// data-sortable attribute reads "ready" once the script ran), the HTML after it.
+std::string sortable_table_page(const std::string& title, const std::string& before_table,
+                                const std::vector<std::string>& headers, const std::vector<std::vector<HtmlCell>>& rows,
+                                const std::string& after_table);
 
 /// Writes report.md, report.html and f_miss.svg into `folder`, each atomically.
 void write_report(const std::filesystem::path& folder, const nlohmann::json& manifest);

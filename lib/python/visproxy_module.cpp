@@ -26,6 +26,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/version.h"
+#include "visproxy/evaluate/batch.h"
 #include "visproxy/evaluate/measure_proxies.h"
 #include "visproxy/evaluate/proxy_folder.h"
 #include "visproxy/evaluate/scene_proxies.h"
@@ -424,6 +425,26 @@ py::array_t<double> image_array(const Image& image) {
   return array;
 }
 
+BatchOptions batch_options(const std::optional<std::vector<std::string>>& proxies, std::uint64_t seed, std::size_t rays,
+                           std::size_t timed_rays, std::size_t hausdorff_samples, std::size_t gssa_lines) {
+  BatchOptions options{.proxies = proxies.value_or(std::vector<std::string>{}), .seed = seed, .rays = rays,
+                       .timed_rays = timed_rays, .hausdorff_samples = hausdorff_samples, .gssa_lines = gssa_lines};
+  if (!options.proxies.empty()) (void)parse_proxy_specs(options.proxies);
+  return options;
+}
+
+py::object batch_asset(const std::filesystem::path& mesh, const std::filesystem::path& output,
+                       const std::optional<std::vector<std::string>>& proxies, std::uint64_t seed, std::size_t rays,
+                       std::size_t timed_rays, std::size_t hausdorff_samples, std::size_t gssa_lines, bool retry_failed) {
+  const BatchOptions options = batch_options(proxies, seed, rays, timed_rays, hausdorff_samples, gssa_lines);
+  json record;
+  {
+    py::gil_scoped_release release;
+    record = process_asset(mesh, output, options, retry_failed);
+  }
+  return to_python(record);
+}
+
 py::dict render_scene(const std::filesystem::path& scene_path, const std::string& integrator, const std::string& visibility,
                       const std::string& estimator, const std::string& probabilities, const std::string& self_shadow, int spp,
                       int shadow_rays, std::uint64_t seed, int width, int height, std::optional<std::string> proxy,
@@ -588,6 +609,21 @@ PYBIND11_MODULE(visproxy, m) {
         "Traces every proxy with the same seeded isotropic lines as the mesh (or a scene's shadow segments, `scene`), as "
         "'visproxy measure' does. Returns one measure dict per proxy: counts, f_hit, f_miss, v_avg, gssa_ratio (value, "
         "lower, upper at 95 %), optimal probabilities, variance, cost_ns_per_ray.");
+  m.def("batch_assets", &visproxy::read_asset_list, "list"_a,
+        "The meshes of a batch list, as 'visproxy batch' reads it: a text file of paths (relative to the file; blank "
+        "lines and # comments skipped) or a folder searched recursively for mesh files, sorted.");
+  m.def("batch_shard", &visproxy::shard_assets, "assets"_a, "index"_a, "count"_a,
+        "Shard `index` of `count` of an asset list: the assets at positions index, index + count, ...");
+  m.def("batch_asset", &batch_asset, "mesh"_a, "output"_a, py::kw_only(), "proxies"_a = py::none(), "seed"_a = 1,
+        "rays"_a = 200000, "timed_rays"_a = 50000, "hausdorff_samples"_a = 20000, "gssa_lines"_a = 100000,
+        "retry_failed"_a = false,
+        "Processes one asset of a batch into the batch folder `output` as 'visproxy batch' does (build, verify, measure, "
+        "report into OUTPUT/STEM-KEY, renamed into place when complete; a complete folder is not processed again; an "
+        "error is recorded in OUTPUT/STEM-KEY.failed.json, not raised). Returns the asset's record: asset, folder, "
+        "status ('ok', 'claims_failed', 'failed'), error, proxies, claims_holding, triangles, seconds, resumed.");
+  m.def("batch_merge", [](const std::filesystem::path& folder) { return to_python(visproxy::batch_merge(folder)); }, "folder"_a,
+        "Writes FOLDER/summary.json, summary.csv and summary.html from every asset record in the batch folder (all "
+        "shards) and returns the summary as a dict: counts, records, one row per asset and proxy, timed_fields.");
   m.def("render", &render_scene, "scene"_a, py::kw_only(), "integrator"_a = "direct", "visibility"_a = "exact",
         "estimator"_a = "eq8", "probabilities"_a = "equal", "self_shadow"_a = "heuristic", "spp"_a = 16,
         "shadow_rays"_a = 1, "seed"_a = 1, "width"_a = 0, "height"_a = 0, "proxy"_a = py::none(), "cache"_a = py::none(),
