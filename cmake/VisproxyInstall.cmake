@@ -19,6 +19,8 @@ install(TARGETS visproxy_shared EXPORT visproxyTargets
         LIBRARY DESTINATION "${CMAKE_INSTALL_LIBDIR}"
         INCLUDES DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
 install(TARGETS visproxy RUNTIME DESTINATION "${CMAKE_INSTALL_BINDIR}")
+# visproxy batch over a Dask cluster, as `visproxy-dask` (needs python3-distributed).
+install(PROGRAMS "${PROJECT_SOURCE_DIR}/apps/dask/visproxy_dask.py" DESTINATION "${CMAKE_INSTALL_BINDIR}" RENAME visproxy-dask)
 # The module finds libvisproxy.so three levels up, in the prefix's library folder.
 set_target_properties(visproxy_python PROPERTIES INSTALL_RPATH "$ORIGIN/../../../${CMAKE_INSTALL_LIBDIR}")
 install(TARGETS visproxy_python LIBRARY DESTINATION "lib/python3/dist-packages")

@@ -14,7 +14,7 @@ set(prefix "${WORK_DIR}/prefix")
 
 # 1. Install into a fresh prefix.
 run("cmake --install" ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${prefix}")
-foreach(path lib/libvisproxy.so bin/visproxy lib/cmake/visproxy/visproxyConfig.cmake
+foreach(path lib/libvisproxy.so bin/visproxy bin/visproxy-dask lib/cmake/visproxy/visproxyConfig.cmake
         lib/cmake/visproxy/visproxyConfigVersion.cmake lib/pkgconfig/visproxy.pc
         include/visproxy/render/renderer.h share/visproxy/schemas/scene.schema.json)
   if(NOT EXISTS "${prefix}/${path}")
@@ -45,6 +45,13 @@ endforeach()
 run("installed visproxy --version" "${prefix}/bin/visproxy" --version)
 if(NOT output MATCHES "0\\.2\\.")
   message(FATAL_ERROR "installed visproxy --version printed: ${output}")
+endif()
+
+# The Dask entry point runs from the prefix with the installed module.
+run("installed visproxy-dask --help" ${CMAKE_COMMAND} -E env "PYTHONPATH=${prefix}/lib/python3/dist-packages"
+    "${PYTHON}" "${prefix}/bin/visproxy-dask" --help)
+if(NOT output MATCHES "--scheduler")
+  message(FATAL_ERROR "installed visproxy-dask --help printed: ${output}")
 endif()
 
 # 4. A CMake consumer: find_package(visproxy 0.2 REQUIRED) and visproxy::visproxy.
