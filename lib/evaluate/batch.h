@@ -8,6 +8,7 @@
 //                           and asset.json, the asset's record; renamed into place whole
 //   ROOT/STEM-KEY.failed.json  the record of an asset that failed, with its one-line error
 //   ROOT/.partial/          folders being written (a crash leaves them here, never in place)
+//   ROOT/logs/STEM-KEY.log  the CLI's worker process's stderr for the asset
 //   ROOT/summary.json, summary.csv, summary.html  written by batch_merge
 // KEY is a 64-bit FNV-1a hash (16 hexadecimal digits) of the mesh file's bytes, the batch
 // options and visproxy's version, so a changed mesh, option or version gets a new folder.
