@@ -195,7 +195,7 @@ void add_batch_command(CLI::App& app, int& exit_code) {
   command->callback([options, &exit_code] {
     if (!options->merge.empty()) {
       if (!options->list.empty() || !options->folder.empty())
-        throw InvalidInputError("", "batch --merge DIR takes no LIST and no -o");
+        throw CLI::ValidationError("--merge", "takes no LIST and no -o");
       const nlohmann::json summary = batch_merge(options->merge);
       std::printf("visproxy batch --merge: %zu assets in %s (%zu ok, %zu with a failing claim, %zu failed, %zu proxies): %s, %s, %s\n",
                   summary["assets"].get<std::size_t>(), options->merge.string().c_str(), summary["ok"].get<std::size_t>(),
@@ -205,7 +205,7 @@ void add_batch_command(CLI::App& app, int& exit_code) {
       exit_code = kSuccess;
       return;
     }
-    if (options->folder.empty()) throw InvalidInputError("", "batch needs -o DIR (or --merge DIR)");
+    if (options->folder.empty()) throw CLI::ValidationError("-o", "batch needs -o DIR (or --merge DIR)");
     // Specs are checked before any asset is read: a bad one fails the run, not every asset.
     if (!options->batch.proxies.empty()) (void)parse_proxy_specs(options->batch.proxies);
     if (!options->one.empty()) {
@@ -213,7 +213,7 @@ void add_batch_command(CLI::App& app, int& exit_code) {
       exit_code = kSuccess;  // the record it wrote says how the asset went
       return;
     }
-    if (options->list.empty()) throw InvalidInputError("", "batch needs LIST (a text file of mesh paths or a folder)");
+    if (options->list.empty()) throw CLI::ValidationError("list", "batch needs LIST (a text file of mesh paths or a folder)");
     exit_code = run_batch(*options);
   });
 }

@@ -3,6 +3,7 @@
 namespace visproxy {
 
 std::string located_message(const std::filesystem::path& file, std::string_view problem, std::uint64_t line) {
+  if (file.empty() && line == 0) return std::string(problem);  // not about a file: the problem alone
   std::string message = file.string();
   if (line > 0) message += ":" + std::to_string(line);
   message += ": ";

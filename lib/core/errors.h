@@ -45,7 +45,7 @@ class IOError : public Error {
 };
 
 /// A located message as errors and warnings print it: "FILE: problem", or "FILE:LINE:
-/// problem" when `line` is not 0.
+/// problem" when `line` is not 0; the problem alone when there is no file (an option).
 std::string located_message(const std::filesystem::path& file, std::string_view problem, std::uint64_t line = 0);
 
 /// Receives a reader's warnings about input it read despite a harmless flaw, one line each
