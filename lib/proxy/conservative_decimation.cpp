@@ -74,6 +74,47 @@ using SegmentPrimitive = CGAL::AABB_segment_primitive<Kernel, std::vector<CgalSe
 using SegmentTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, SegmentPrimitive>>;
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
 
+// A traversal of a triangle tree that descends by plain bounding-box overlap (the boxes are
+// exact: unions of the triangles' double coordinates) and hands each triangle whose box
+// overlaps the query's to `f`, until f returns true. Cheaper than the tree's own queries,
+// which test a triangle or a box against every node with filtered exact predicates.
+template <typename F>
+class BoxOverlapTraversal {
+ public:
+  explicit BoxOverlapTraversal(F& f) : f_(f) {}
+  bool go_further() const { return !found_; }
+  void intersection(const CGAL::Bbox_3& query, const TrianglePrimitive& primitive) {
+    const CgalTriangle& t = primitive.datum();
+    if (overlaps(query, t) && f_(t)) found_ = true;
+  }
+  template <typename Node>
+  bool do_intersect(const CGAL::Bbox_3& query, const Node& node) const {
+    return CGAL::do_overlap(query, node.bbox());
+  }
+  bool found() const { return found_; }
+
+ private:
+  // The triangle's box against the query's, from its double coordinates directly.
+  static bool overlaps(const CGAL::Bbox_3& query, const CgalTriangle& t) {
+    for (int k = 0; k < 3; ++k) {
+      const double a = t.vertex(0)[k], b = t.vertex(1)[k], c = t.vertex(2)[k];
+      if (std::max({a, b, c}) < query.min(k) || std::min({a, b, c}) > query.max(k)) return false;
+    }
+    return true;
+  }
+  F& f_;
+  bool found_ = false;
+};
+
+// Whether f(t) holds for some input triangle t whose box overlaps `query`.
+template <typename F>
+bool any_overlapping(const TriangleTree& tree, const CGAL::Bbox_3& query, F f) {
+  if (tree.empty()) return false;
+  BoxOverlapTraversal<F> traversal(f);
+  tree.traversal(query, traversal);
+  return traversal.found();
+}
+
 Point to_point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
 
 bool boxes_overlap(const BoundingBox& a, const BoundingBox& b) {
@@ -194,7 +235,8 @@ class InputGeometry {
 
   /// Does the closed triangle meet any input triangle (or degenerate triangle)?
   bool meets(const CgalTriangle& t) const {
-    if (triangle_tree_.do_intersect(t)) return true;
+    if (any_overlapping(triangle_tree_, t.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); }))
+      return true;
     if (!segments_.empty() && segment_tree_.do_intersect(t)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(t, p)) return true;
@@ -205,7 +247,8 @@ class InputGeometry {
   /// that is a point is reported as meeting.
   bool meets_segment(const CgalSegment& s) const {
     if (s.is_degenerate()) return true;  // a point: counted as meeting, which only costs the caller a retry
-    if (triangle_tree_.do_intersect(s)) return true;
+    if (any_overlapping(triangle_tree_, s.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(s, u); }))
+      return true;
     if (!segments_.empty() && segment_tree_.do_intersect(s)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(s, p)) return true;
@@ -247,10 +290,7 @@ class InputGeometry {
             return true;
       return false;
     };
-    scratch_hits_.clear();
-    triangle_tree_.all_intersected_primitives(query, std::back_inserter(scratch_hits_));
-    for (const auto& id : scratch_hits_)
-      if (close_to_triangle(*id)) return true;
+    if (any_overlapping(triangle_tree_, query, close_to_triangle)) return true;
     scratch_segment_hits_.clear();
     if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(scratch_segment_hits_));
     for (const auto& id : scratch_segment_hits_) {  // degenerate input triangles
@@ -326,7 +366,6 @@ class InputGeometry {
       cell_items_[fill[cell_of_item[i]]++] = static_cast<std::uint32_t>(i);
   }
 
-  mutable std::vector<TrianglePrimitive::Id> scratch_hits_;
   mutable std::vector<SegmentPrimitive::Id> scratch_segment_hits_;
   std::vector<CgalTriangle> triangles_;
   std::vector<CgalSegment> segments_;
@@ -613,11 +652,18 @@ class ConservativeDecimator::Impl {
 
   /// Moves vertices inwards, towards the input, where the checks allow it: each vertex is
   /// tried at fractions of its distance to the input along minus its normal.
-  void set_clearance(double keep_clear) { keep_clear_ = keep_clear; }
+  void set_clearance(double keep_clear) {
+    if (keep_clear != keep_clear_) shrink_failed_at_.clear();  // the moves' targets and checks change
+    keep_clear_ = keep_clear;
+  }
 
   void shrink_vertices() {
+    if (shrink_failed_at_.size() < positions_.size()) shrink_failed_at_.resize(positions_.size(), 0);
     for (VertexIndex v = 0; v < positions_.size(); ++v) {
       if (!vertex_alive_[v]) continue;
+      // Every move of v failed last time for reasons its star alone decides (the input, the
+      // star's own triangles), and neither v nor a neighbour has moved since: it would again.
+      if (shrink_failed_at_[v] == vertex_version_[v] + 1u) continue;
       Vertex normal = Vertex::Zero();
       for (const std::uint32_t t : vertex_triangles_[v]) {
         const Triangle& triangle = triangles_[t];
@@ -628,13 +674,19 @@ class ConservativeDecimator::Impl {
       normal.normalize();
       const double clearance = input_.distance(to_point(positions_[v])) - keep_clear_;
       if (!(clearance > 0)) continue;
+      bool moved = false, blocked_by_proxy = false;
       for (const double fraction : {0.9, 0.6, 0.3}) {
         const Vertex target = positions_[v] - fraction * clearance * normal;
         const StarReplacement replacement = move_replacement(v, target);
-        if (!replacement_is_safe(replacement)) continue;
+        if (!replacement_is_safe(replacement)) {
+          blocked_by_proxy = blocked_by_proxy || rejected_by_proxy_;
+          continue;
+        }
         apply(replacement, v, v);
+        moved = true;
         break;
       }
+      if (!moved && !blocked_by_proxy) shrink_failed_at_[v] = vertex_version_[v] + 1u;
     }
   }
 
@@ -834,6 +886,7 @@ class ConservativeDecimator::Impl {
   }
 
   bool replacement_is_safe(const StarReplacement& r) {
+    rejected_by_proxy_ = false;
     for (const TriangleCorners& c : r.created)
       if (CGAL::collinear(c.points[0], c.points[1], c.points[2])) return false;
 
@@ -855,7 +908,10 @@ class ConservativeDecimator::Impl {
         meets = triangles_meet_beyond_shared(c, other);
         return !meets;
       });
-      if (meets) return false;
+      if (meets) {
+        rejected_by_proxy_ = true;  // by the rest of the proxy, which may move out of the way
+        return false;
+      }
     }
 
     // (b) No new triangle meets the input. Shortcut: if the new fan meets the old star only
@@ -988,6 +1044,8 @@ class ConservativeDecimator::Impl {
 
   const InputGeometry& input_;
   double keep_clear_ = 0;
+  bool rejected_by_proxy_ = false;  // the last replacement_is_safe failed on a triangle outside the star
+  std::vector<std::uint32_t> shrink_failed_at_;  // per vertex: 1 + its version when its moves last failed, or 0
   std::vector<Vertex> positions_;
   std::vector<Triangle> triangles_;
   std::vector<std::uint8_t> triangle_alive_;
