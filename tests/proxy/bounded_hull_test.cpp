@@ -171,7 +171,7 @@ TEST(BoundedHull, NonManifoldInput) {
 // could not be proved to contain them: verify's exact check, as a user runs it, must hold.
 TEST(BoundedHull, PlanesThroughTheMeshsOwnFacesStillVerify) {
   for (const double scale : {1.0, 1e-3, 1e4}) {
-    for (const Vertex offset : {Vertex(0, 0, 0), Vertex(2.5e5, -1.25e5, 3e4)}) {
+    for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(2.5e5, -1.25e5, 3e4)}) {
       SCOPED_TRACE("scale " + std::to_string(scale) + ", offset " + std::to_string(offset.x()));
       constexpr int kSides = 40;
       // Tilted, so that no plane is an axis plane whose corners round onto it exactly.
