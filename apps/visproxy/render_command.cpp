@@ -92,7 +92,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
                    "direct: M area-light samples per camera sample; vpl: those plus every virtual point light left by N "
                    "light paths of B bounces (instant radiosity); lightcuts: K point lights per area light (plus the VPLs "
                    "of --vpls, if given) shaded through a lightcut (Walter et al. 2005), each cluster by a representative "
-                   "traced exactly [default: direct]")
+                   "traced exactly, or by its central light where the proxies prove its visibility [default: direct]")
       ->transform(CLI::CheckedTransformer(integrators, CLI::ignore_case));
   CLI::Option* vpls_option =
       command->add_option("--vpls", o->vpls, "vpl: light paths traced from the area lights (N); lightcuts: add their VPLs to the point lights [default: 1024; lightcuts: none]")
@@ -116,7 +116,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
                    "their error bounds shrink [default: none]")
       ->transform(CLI::CheckedTransformer(bounds, CLI::ignore_case));
   command->add_flag("--check-proofs", o->check_proofs,
-                    "lightcuts: also trace the representative of every proved cluster and report how many disagreed with the "
+                    "lightcuts: also trace the light every proved cluster is shaded by and report how many disagreed with the "
                     "proof (proof_disagreements in the stats; expected 0)");
   command->add_option("--bounces", o->bounces, "vpl: diffuse hits per light path that leave a VPL (B) [default: 1]")->check(CLI::Range(1, 64));
   command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, apart from --seed so that a reference can share the VPLs [default: 1]");
