@@ -105,29 +105,34 @@ int run_batch(const BatchCommandOptions& options) {
   std::fflush(stdout);
   const bool terminal = ::isatty(STDERR_FILENO);
   std::size_t done = 0, failed = 0, next = 0;
-  auto finish = [&](const std::filesystem::path& mesh, const nlohmann::json& record) {
+  // An asset's folder name hashes its bytes: computed once per asset, kept with it.
+  struct Asset {
+    std::filesystem::path mesh;
+    std::string name;
+  };
+  auto finish = [&](const Asset& asset, const nlohmann::json& record) {
     ++done;
     if (record.value("status", "failed") != "ok") ++failed;
     if (terminal) std::fprintf(stderr, "\r\033[K");
-    std::printf("visproxy batch: [%zu/%zu] %s -> %s: %s\n", done, assets.size(), mesh.string().c_str(),
-                record["folder"].is_string() ? (options.folder / record["folder"].get<std::string>()).string().c_str()
-                                             : (options.folder / (asset_folder_name(mesh, options.batch) + ".failed.json")).string().c_str(),
+    std::printf("visproxy batch: [%zu/%zu] %s -> %s: %s\n", done, assets.size(), asset.mesh.string().c_str(),
+                (options.folder / (record["folder"].is_string() ? record["folder"].get<std::string>() : asset.name + ".failed.json"))
+                    .string().c_str(),
                 describe(record).c_str());
     std::fflush(stdout);
     if (terminal) draw_progress(done, assets.size(), failed, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   };
-  std::map<pid_t, std::filesystem::path> running;
+  std::map<pid_t, Asset> running;
   while (next < assets.size() || !running.empty()) {
     while (next < assets.size() && running.size() < options.jobs) {
-      const std::filesystem::path& mesh = assets[next++];
-      nlohmann::json record = find_asset_record(mesh, options.folder, options.batch);
+      const Asset asset{assets[next], asset_folder_name(assets[next], options.batch)};
+      ++next;
+      nlohmann::json record = find_asset_record(options.folder, asset.name);
       if (!record.is_null() && (record.value("status", "") != "failed" || !options.retry_failed)) {
         record["resumed"] = true;
-        finish(mesh, record);
+        finish(asset, record);
         continue;
       }
-      const std::filesystem::path log = options.folder / "logs" / (asset_folder_name(mesh, options.batch) + ".log");
-      running[spawn_child(child_arguments(options, mesh), log)] = mesh;
+      running[spawn_child(child_arguments(options, asset.mesh), options.folder / "logs" / (asset.name + ".log"))] = asset;
     }
     if (running.empty()) break;
     int status = 0;
@@ -135,19 +140,19 @@ int run_batch(const BatchCommandOptions& options) {
     if (pid < 0) throw Error("visproxy batch: waiting for a worker failed: " + std::string(std::strerror(errno)));
     const auto it = running.find(pid);
     if (it == running.end()) continue;
-    const std::filesystem::path mesh = it->second;
+    const Asset asset = it->second;
     running.erase(it);
-    nlohmann::json record = find_asset_record(mesh, options.folder, options.batch);
-    const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == kSuccess;
-    if (record.is_null() || (!clean && record.value("status", "") == "failed" && record["error"].is_null())) {
+    // The worker writes the record; none means it died before it could.
+    nlohmann::json record = find_asset_record(options.folder, asset.name);
+    if (record.is_null()) {
       const std::string why = WIFSIGNALED(status) ? "the worker was ended by signal " + std::to_string(WTERMSIG(status)) +
                                                         " (" + strsignal(WTERMSIG(status)) + ")"
                                                   : "the worker exited with code " + std::to_string(WEXITSTATUS(status));
-      record = record_failure(mesh, options.folder, options.batch,
-                              mesh.string() + ": " + why + " before recording the asset; its log: " +
-                                  (options.folder / "logs" / (asset_folder_name(mesh, options.batch) + ".log")).string());
+      record = record_failure(asset.mesh, options.folder, asset.name, options.batch,
+                              asset.mesh.string() + ": " + why + " before recording the asset; its log: " +
+                                  (options.folder / "logs" / (asset.name + ".log")).string());
     }
-    finish(mesh, record);
+    finish(asset, record);
   }
   if (terminal) std::fprintf(stderr, "\r\033[K");
   const nlohmann::json summary = batch_merge(options.folder);

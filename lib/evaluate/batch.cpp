@@ -178,24 +178,26 @@ std::string asset_folder_name(const fs::path& mesh, const BatchOptions& options)
   return stem + "-" + hash.hex();
 }
 
-json find_asset_record(const fs::path& mesh, const fs::path& root, const BatchOptions& options) {
-  const std::string name = asset_folder_name(mesh, options);
+namespace {
+
+// The record of the complete folder ROOT/NAME, or null (missing, or not a valid record).
+json complete_record(const fs::path& root, const std::string& name) {
   std::error_code error;
-  if (fs::exists(root / name / "asset.json", error)) {
-    json record = read_record(root / name / "asset.json");
-    if (!record.is_null()) return record;
-  }
+  return fs::exists(root / name / "asset.json", error) ? read_record(root / name / "asset.json") : json(nullptr);
+}
+
+}  // namespace
+
+json find_asset_record(const fs::path& root, const std::string& name) {
+  if (json record = complete_record(root, name); !record.is_null()) return record;
+  std::error_code error;
   if (fs::exists(root / (name + ".failed.json"), error)) return read_record(root / (name + ".failed.json"));
   return nullptr;
 }
 
-json record_failure(const fs::path& mesh, const fs::path& root, const BatchOptions& options, const std::string& error) {
-  const std::string name = asset_folder_name(mesh, options);
-  std::error_code ignored;
-  if (fs::exists(root / name / "asset.json", ignored)) {
-    json record = read_record(root / name / "asset.json");
-    if (!record.is_null()) return record;
-  }
+json record_failure(const fs::path& mesh, const fs::path& root, const std::string& name, const BatchOptions& options,
+                    const std::string& error) {
+  if (json record = complete_record(root, name); !record.is_null()) return record;
   json record = base_record(mesh, name, options);
   record["folder"] = nullptr;
   record["error"] = one_line(error);
@@ -212,7 +214,7 @@ json process_asset(const fs::path& mesh_path, const fs::path& root, const BatchO
   const std::string name = asset_folder_name(mesh_path, options);
   const fs::path done = root / name;
   const fs::path failed = root / (name + ".failed.json");
-  if (json record = find_asset_record(mesh_path, root, options); !record.is_null()) {
+  if (json record = find_asset_record(root, name); !record.is_null()) {
     if (record.value("status", "") != "failed" || !retry_failed) {
       record["resumed"] = true;
       return record;
@@ -266,12 +268,11 @@ json process_asset(const fs::path& mesh_path, const fs::path& root, const BatchO
     // Into place whole. Another worker may have finished the same asset meanwhile (the
     // same bytes listed twice): its folder is as good as this one.
     // A folder in place without a valid record is not finished (edited, or not ours): replaced.
-    if (fs::exists(done, error) && (!fs::exists(done / "asset.json", error) || read_record(done / "asset.json").is_null()))
-      fs::remove_all(done, error);
+    if (fs::exists(done, error) && complete_record(root, name).is_null()) fs::remove_all(done, error);
     fs::rename(partial, done, error);
     if (error) {
       fs::remove_all(partial, error);
-      if (json other = find_asset_record(mesh_path, root, options); !other.is_null() && other.value("status", "") != "failed")
+      if (json other = complete_record(root, name); !other.is_null())
         return other;
       throw IOError(done, "cannot move the finished proxy folder into place");
     }

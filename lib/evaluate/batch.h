@@ -65,14 +65,16 @@ std::string asset_folder_name(const std::filesystem::path& mesh, const BatchOpti
 nlohmann::json process_asset(const std::filesystem::path& mesh, const std::filesystem::path& root,
                              const BatchOptions& options, bool retry_failed = false);
 
-/// The record of a failure found outside process_asset (a crashed worker): written to
-/// ROOT/NAME.failed.json unless a complete folder exists; returns it.
+/// The record of a failure found outside process_asset (a crashed worker) of the asset
+/// `mesh`, whose folder name is `name` (asset_folder_name): written to
+/// ROOT/NAME.failed.json unless a complete folder exists, whose record is returned then.
 nlohmann::json record_failure(const std::filesystem::path& mesh, const std::filesystem::path& root,
-                              const BatchOptions& options, const std::string& error);
+                              const std::string& name, const BatchOptions& options, const std::string& error);
 
-/// The record of an asset already in ROOT (complete or failed), or null.
-nlohmann::json find_asset_record(const std::filesystem::path& mesh, const std::filesystem::path& root,
-                                 const BatchOptions& options);
+/// The record of the asset whose folder name is `name` (asset_folder_name) already in
+/// ROOT, complete or failed, or null. (The name is taken, not the mesh, so that a caller
+/// hashes the mesh's bytes once.)
+nlohmann::json find_asset_record(const std::filesystem::path& root, const std::string& name);
 
 /// One summary of every record in ROOT (all shards): ROOT/summary.json (the records, and
 /// one row per asset and proxy: kind, primitives, verdict, f_hit, f_miss, GSSA ratio,
