@@ -165,10 +165,11 @@ TEST(BoundedHull, NonManifoldInput) {
   expect_valid(build_bounded_hull(pig, {.max_faces = 18}), pig, 18);
 }
 
-// A prism of 40 sides: its hull has 42 faces, and hull:32 keeps the two caps, planes the
-// mesh's own cap triangles lie in. Were the kept planes left touching the mesh, the mesh's
-// caps would meet the proxy's, and the proxy (convex only up to the rounding of its corners)
-// could not be proved to contain them: verify's exact check, as a user runs it, must hold.
+// A prism of 40 sides, tilted: its hull has 42 faces, and hull:32 keeps the two caps, planes
+// the mesh's own cap triangles lie in, so the mesh lies against the kept planes; verify's
+// exact check, as a user runs it, must hold at every scale and far from the origin. (Each
+// corner here has three planes only; the corners where many meet, which broke the check
+// before the planes were kept strictly off the mesh, are the next test's.)
 TEST(BoundedHull, PlanesThroughTheMeshsOwnFacesStillVerify) {
   for (const double scale : {1.0, 1e-3, 1e4}) {
     for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(2.5e5, -1.25e5, 3e4)}) {
