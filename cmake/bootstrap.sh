@@ -17,7 +17,7 @@ packages="build-essential cmake ninja-build ccache pkg-config
   libmeshoptimizer-dev libpng-dev libopenexr-dev
   python3-dev pybind11-dev python3-numpy libassimp-dev"
 # The test suite opens the HTML report in headless Chromium and runs the Python tests.
-if [ "$mode" = test ]; then packages="$packages chromium python3-pytest parallel python3-distributed"; fi
+if [ "$mode" = test ]; then packages="$packages chromium python3-pil python3-pytest parallel python3-distributed"; fi
 
 missing=""
 for package in $packages; do

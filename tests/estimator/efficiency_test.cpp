@@ -1,0 +1,235 @@
+#include "visproxy/estimator/efficiency.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "visproxy/core/random.h"
+
+namespace visproxy {
+namespace {
+
+RayTypeFractions fractions_of(double f_hit, double f_miss, double v) {
+  RayTypeFractions fractions;
+  fractions.f = {f_hit * (1 - v), (1 - f_hit) * (1 - v), (1 - f_miss) * v, f_miss * v};
+  return fractions;
+}
+
+constexpr TraceCosts kCosts{.proxy_ns = 40, .mesh_ns = 300};
+
+TEST(Efficiency, BoundsOfAnOutsideProxyCostTheProxyPlusTheMeshOnRaysThatHitIt) {
+  // Every ray the proxy misses is proved free; the others trace the mesh. The variance is
+  // the mesh's own, so the efficiency is the ratio of the costs.
+  const RayTypeFractions f = fractions_of(1.0, 0.6, 0.5);
+  const UsePrediction p = predict_use(ProxyUse::bounds, ProxyKind::outside, f, kCosts);
+  ASSERT_TRUE(p.usable);
+  const double hit = f.f[0] + f.f[2];
+  EXPECT_NEAR(p.ns_per_ray, 40 + 300 * hit, 1e-9);
+  EXPECT_NEAR(p.variance, 0.25, 1e-12);
+  EXPECT_NEAR(p.efficiency, 300 / (40 + 300 * hit), 1e-12);
+  // The same for an inside proxy: its hits are proved blocked.
+  const RayTypeFractions g = fractions_of(0.7, 1.0, 0.4);
+  const UsePrediction q = predict_use(ProxyUse::bounds, ProxyKind::inside, g, kCosts);
+  EXPECT_NEAR(q.ns_per_ray, 40 + 300 * (g.f[1] + g.f[3]), 1e-9);
+  // A general proxy, or one whose claim was not proved, proves nothing.
+  const UsePrediction r = predict_use(ProxyUse::bounds, ProxyKind::general, f, kCosts);
+  EXPECT_FALSE(r.usable);
+  EXPECT_EQ(r.efficiency, 0);
+  EXPECT_FALSE(r.why_not.empty());
+}
+
+// The brute-force minimum of variance x cost over a fine grid of the use's parameters.
+double grid_minimum(ProxyUse use, ProxyKind kind, const RayTypeFractions& f, double floor) {
+  double best = INFINITY;
+  const int n = 200;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j) {
+      const double a = floor + (1 - floor) * i / n, b = floor + (1 - floor) * j / n;
+      UseSetting s;
+      if (use == ProxyUse::control_variate) {
+        s.correction = {kind == ProxyKind::outside ? 0.0 : a, kind == ProxyKind::inside ? 0.0 : b};
+      } else {
+        if (kind == ProxyKind::outside) s.term = {a, 1 - a, 0};
+        else if (kind == ProxyKind::inside) s.term = {a, 0, 1 - a};
+        else s.term = {a, b, 1 - a - b};
+        if (s.term.p1 < floor || s.term.p2 < (kind == ProxyKind::inside ? 0 : floor) - 1e-12 ||
+            s.term.p3 < (kind == ProxyKind::outside ? 0 : floor) - 1e-12 || s.term.p1 > 1 - floor + 1e-12)
+          continue;
+      }
+      const UsePrediction p = predict_use_at(use, kind, f, kCosts, s);
+      best = std::min(best, p.variance * p.ns_per_ray);
+    }
+  return best;
+}
+
+TEST(Efficiency, TheChosenSettingIsAtLeastAsGoodAsTheBestOfAFineGrid) {
+  const double floor = 0.05;
+  for (ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general})
+    for (ProxyUse use : {ProxyUse::control_variate, ProxyUse::term_choice})
+      for (double f_hit : {0.3, 0.8, 0.97})
+        for (double f_miss : {0.2, 0.6, 0.95})
+          for (double v : {0.1, 0.5, 0.9}) {
+            const RayTypeFractions f =
+                fractions_of(kind == ProxyKind::outside ? 1.0 : f_hit, kind == ProxyKind::inside ? 1.0 : f_miss, v);
+            const UsePrediction p = predict_use(use, kind, f, kCosts, {.floor = floor});
+            const double grid = grid_minimum(use, kind, f, floor);
+            SCOPED_TRACE(std::string(use_name(use)) + " " + std::string(kind_name(kind)) + " f_hit " +
+                         std::to_string(f_hit) + " f_miss " + std::to_string(f_miss) + " v " + std::to_string(v));
+            EXPECT_LE(p.variance * p.ns_per_ray, grid * (1 + 1e-6));
+            EXPECT_GT(p.efficiency, 0);
+            EXPECT_TRUE(std::isfinite(p.efficiency));
+            // Every probability the kind needs is at least the floor.
+            if (use == ProxyUse::control_variate) {
+              if (kind != ProxyKind::outside) {
+                EXPECT_GE(p.setting.correction.after_miss, floor);
+              }
+              if (kind != ProxyKind::inside) {
+                EXPECT_GE(p.setting.correction.after_hit, floor);
+              }
+            } else {
+              EXPECT_GE(p.setting.term.p1, floor - 1e-12);
+              if (kind != ProxyKind::inside) {
+                EXPECT_GE(p.setting.term.p2, floor - 1e-12);
+              }
+              if (kind != ProxyKind::outside) {
+                EXPECT_GE(p.setting.term.p3, floor - 1e-12);
+              }
+              EXPECT_NEAR(p.setting.term.p1 + p.setting.term.p2 + p.setting.term.p3, 1, 1e-12);
+            }
+          }
+}
+
+// Simulates the estimators ray by ray on a population with known fractions and compares the
+// sample variance and the mean cost with the prediction: the model, not just its algebra.
+TEST(Efficiency, PredictedVarianceAndCostMatchASimulationOfEachEstimator) {
+  const RayTypeFractions f = fractions_of(0.8, 0.7, 0.45);
+  const std::size_t n = 400000;
+  for (ProxyUse use : {ProxyUse::control_variate, ProxyUse::term_choice, ProxyUse::bounds}) {
+    const ProxyKind kind = use == ProxyUse::bounds ? ProxyKind::inside : ProxyKind::general;
+    const RayTypeFractions g = use == ProxyUse::bounds ? fractions_of(0.8, 1.0, 0.45) : f;
+    const UsePrediction p = predict_use(use, kind, g, kCosts);
+    Random random(7 + static_cast<std::uint64_t>(use));
+    double sum = 0, sum2 = 0, sum4 = 0, cost = 0;
+    std::vector<double> samples(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double u = random.uniform();
+      const int type = u < g.f[0] ? 0 : u < g.f[0] + g.f[1] ? 1 : u < g.f[0] + g.f[1] + g.f[2] ? 2 : 3;
+      const double v = type >= 2 ? 1 : 0, v_proxy = type == 1 || type == 3 ? 1 : 0;
+      double estimate = 0, c = kCosts.proxy_ns;
+      if (use == ProxyUse::control_variate) {
+        const double q = v_proxy == 1 ? p.setting.correction.after_miss : p.setting.correction.after_hit;
+        estimate = v_proxy;
+        if (random.uniform() < q) estimate += (v - v_proxy) / q, c += kCosts.mesh_ns;
+      } else if (use == ProxyUse::term_choice) {
+        const double w = random.uniform();
+        if (w < p.setting.term.p1) {
+          estimate = v_proxy / p.setting.term.p1;
+        } else if (w < p.setting.term.p1 + p.setting.term.p2) {
+          if (v_proxy == 0) estimate = v / p.setting.term.p2, c += kCosts.mesh_ns;
+        } else if (v_proxy == 1) {
+          estimate = -(1 - v) / p.setting.term.p3, c += kCosts.mesh_ns;
+        }
+      } else {
+        estimate = v_proxy == 0 ? 0 : v;  // an inside proxy's hit proves V = 0
+        if (v_proxy == 1) c += kCosts.mesh_ns;
+      }
+      samples[i] = estimate, sum += estimate, cost += c;
+    }
+    const double mean = sum / n;
+    for (double s : samples) sum2 += (s - mean) * (s - mean), sum4 += std::pow(s - mean, 4);
+    const double variance = sum2 / (n - 1);
+    // Standard error of the sample variance: sqrt((m4 - s^4) / n). 5 of them: a false
+    // alarm once in 3.5 million runs under a normal approximation.
+    const double error = std::sqrt((sum4 / n - variance * variance) / n);
+    SCOPED_TRACE(std::string(use_name(use)));
+    EXPECT_NEAR(mean, g.v_avg(), 5 * std::sqrt(variance / n));  // unbiased
+    EXPECT_NEAR(variance, p.variance, 5 * error);
+    // Cost: a mean of at most two values, c_proxy and c_proxy + c_mesh.
+    EXPECT_NEAR(cost / n, p.ns_per_ray, 5 * kCosts.mesh_ns * 0.5 / std::sqrt(static_cast<double>(n)));
+  }
+}
+
+TEST(Efficiency, AnExactProxyOfAllFreeRaysIsComparedByCostAlone) {
+  RayTypeFractions f;
+  f.f = {0, 0, 0, 1};  // every ray free, and the proxy lets every one through
+  const UsePrediction p = predict_use(ProxyUse::control_variate, ProxyKind::outside, f, kCosts);
+  EXPECT_EQ(p.variance, 0);
+  EXPECT_NEAR(p.efficiency, 300.0 / 40.0, 1e-12);
+  // A proxy that blocks a fifth of them: the control variate traces the mesh after every
+  // proxy hit (q = 1, no variance) and after the floor's share of its misses, so it is still
+  // compared by cost; eq. 8 cannot avoid variance where the mesh has none, so it is worth 0.
+  f.f = {0, 0, 0.2, 0.8};
+  const UsePrediction cv = predict_use(ProxyUse::control_variate, ProxyKind::general, f, kCosts);
+  EXPECT_EQ(cv.setting.correction.after_hit, 1.0);
+  EXPECT_EQ(cv.variance, 0);
+  EXPECT_NEAR(cv.efficiency, 300.0 / (40 + 300 * (0.05 * 0.8 + 0.2)), 1e-9);
+  const UsePrediction eq8 = predict_use(ProxyUse::term_choice, ProxyKind::general, f, kCosts);
+  EXPECT_GT(eq8.variance, 0.79);  // at least (sqrt(0.8) + sqrt(0.2))^2 - 1 = 0.8
+  EXPECT_EQ(eq8.efficiency, 0);
+  // No rays: nothing to predict, and no NaN.
+  const UsePrediction none = predict_use(ProxyUse::term_choice, ProxyKind::general, RayTypeFractions{}, kCosts);
+  EXPECT_FALSE(none.usable);
+  EXPECT_EQ(none.efficiency, 0);
+  // Costs not measured.
+  const UsePrediction untimed = predict_use(ProxyUse::bounds, ProxyKind::outside, fractions_of(1, 0.5, 0.5), {});
+  EXPECT_FALSE(untimed.usable);
+}
+
+RayTypeCounts draw_counts(const RayTypeFractions& f, std::uint64_t n, Random& random) {
+  RayTypeCounts counts;
+  for (std::uint64_t i = 0; i < n; ++i) {
+    const double u = random.uniform();
+    counts.counts[u < f.f[0] ? 0 : u < f.f[0] + f.f[1] ? 1 : u < f.f[0] + f.f[1] + f.f[2] ? 2 : 3]++;
+  }
+  return counts;
+}
+
+TEST(Efficiency, TheIntervalCoversTheTrueEfficiencyAtItsStatedRate) {
+  // 200 measurements of 2000 rays each from a known population; the 95 % interval must hold
+  // the true efficiency (at the same setting) in about 190 of them. Fewer than 180 has
+  // probability 3e-4 if the coverage is 95 %; a coverage of 85 % would give fewer than 180
+  // with probability 0.8.
+  for (ProxyUse use : {ProxyUse::control_variate, ProxyUse::term_choice, ProxyUse::bounds}) {
+    const ProxyKind kind = use == ProxyUse::bounds ? ProxyKind::outside : ProxyKind::general;
+    const RayTypeFractions truth = use == ProxyUse::bounds ? fractions_of(1.0, 0.6, 0.4) : fractions_of(0.85, 0.75, 0.4);
+    const UseSetting setting = predict_use(use, kind, truth, kCosts).setting;
+    const double true_efficiency = predict_use_at(use, kind, truth, kCosts, setting).efficiency;
+    Random random(11);
+    int covered = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+      const RayTypeCounts counts = draw_counts(truth, 2000, random);
+      const Interval interval = efficiency_interval(use, kind, counts, kCosts, setting, 1000 + trial, 1000);
+      EXPECT_LE(interval.lower, interval.upper);
+      covered += interval.lower <= true_efficiency && true_efficiency <= interval.upper ? 1 : 0;
+    }
+    SCOPED_TRACE(std::string(use_name(use)));
+    EXPECT_GE(covered, 180);
+  }
+}
+
+TEST(Efficiency, TheIntervalNarrowsWithMoreRaysAndIsReproducible) {
+  const RayTypeFractions truth = fractions_of(0.9, 0.8, 0.5);
+  const UseSetting setting = predict_use(ProxyUse::control_variate, ProxyKind::general, truth, kCosts).setting;
+  RayTypeCounts small, large;
+  for (std::size_t i = 0; i < 4; ++i) {
+    small.counts[i] = static_cast<std::uint64_t>(std::llround(truth.f[i] * 1e3));
+    large.counts[i] = static_cast<std::uint64_t>(std::llround(truth.f[i] * 1e6));
+  }
+  const Interval a = efficiency_interval(ProxyUse::control_variate, ProxyKind::general, small, kCosts, setting, 3);
+  const Interval b = efficiency_interval(ProxyUse::control_variate, ProxyKind::general, large, kCosts, setting, 3);
+  const double value = predict_use_at(ProxyUse::control_variate, ProxyKind::general, truth, kCosts, setting).efficiency;
+  EXPECT_LT(a.lower, value);
+  EXPECT_GT(a.upper, value);
+  EXPECT_LE(b.lower, value);
+  EXPECT_GE(b.upper, value);
+  // The width shrinks as 1/sqrt(n): 1000 times the rays, about 1/31 of the width.
+  EXPECT_LT((b.upper - b.lower) * 15, a.upper - a.lower);
+  const Interval again = efficiency_interval(ProxyUse::control_variate, ProxyKind::general, small, kCosts, setting, 3);
+  EXPECT_EQ(again.lower, a.lower);
+  EXPECT_EQ(again.upper, a.upper);
+}
+
+}  // namespace
+}  // namespace visproxy
