@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "visproxy/core/random.h"
+#include "visproxy/estimator/golden_section.h"
 
 namespace visproxy {
 namespace {
@@ -27,20 +28,8 @@ double minimise(const std::function<double(double)>& f, double lo, double hi, in
     const double value = f(lo + (hi - lo) * i / cells);
     if (value < best_value) best_value = value, best = i;
   }
-  double a = lo + (hi - lo) * std::max(0, best - 1) / cells, b = lo + (hi - lo) * std::min(cells, best + 1) / cells;
-  const double ratio = (std::sqrt(5.0) - 1) / 2;
-  double c = b - ratio * (b - a), d = a + ratio * (b - a);
-  double fc = f(c), fd = f(d);
-  for (int i = 0; i < 100 && b - a > 1e-12 * (hi - lo); ++i) {
-    if (fc <= fd) {
-      b = d, d = c, fd = fc;
-      c = b - ratio * (b - a), fc = f(c);
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + ratio * (b - a), fd = f(d);
-    }
-  }
-  const double x = (a + b) / 2;
+  const double x = golden_section(f, lo + (hi - lo) * std::max(0, best - 1) / cells,
+                                  lo + (hi - lo) * std::min(cells, best + 1) / cells, 1e-12 * (hi - lo));
   return f(x) <= best_value ? x : lo + (hi - lo) * best / cells;
 }
 
@@ -164,8 +153,12 @@ UsePrediction predict_use(ProxyUse use, ProxyKind proved, const RayTypeFractions
         auto best_p2 = [&](double p1) {
           return minimise([&](double p2) { return product({{p1, p2, 1 - p1 - p2}, {}}); }, floor, 1 - p1 - floor, 64);
         };
-        const double p1 = minimise([&](double x) { return product({{x, best_p2(x), 1 - x - best_p2(x)}, {}}); }, floor,
-                                   1 - 2 * floor, 64);
+        const double p1 = minimise(
+            [&](double x) {
+              const double p2 = best_p2(x);
+              return product({{x, p2, 1 - x - p2}, {}});
+            },
+            floor, 1 - 2 * floor, 64);
         const double p2 = best_p2(p1);
         setting.term = {p1, p2, 1 - p1 - p2};
       } else {

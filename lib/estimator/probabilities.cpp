@@ -9,6 +9,8 @@
 #include <cmath>
 #include <limits>
 
+#include "visproxy/estimator/golden_section.h"
+
 namespace visproxy {
 namespace {
 
@@ -35,25 +37,6 @@ Probabilities apply_floor(ProxyKind kind, Probabilities p, double floor) {
   p.p2 = needs_p2(kind) ? keep * p.p2 + floor : 0.0;
   p.p3 = needs_p3(kind) ? keep * p.p3 + floor : 0.0;
   return p;
-}
-
-// Minimum of a convex function on [lo, hi] by golden-section search.
-template <typename F>
-double golden_section(F f, double lo, double hi) {
-  const double ratio = (std::sqrt(5.0) - 1) / 2;
-  double a = lo, b = hi;
-  double c = b - ratio * (b - a), d = a + ratio * (b - a);
-  double fc = f(c), fd = f(d);
-  for (int i = 0; i < 200 && b - a > 1e-13; ++i) {
-    if (fc <= fd) {
-      b = d, d = c, fd = fc;
-      c = b - ratio * (b - a), fc = f(c);
-    } else {
-      a = c, c = d, fc = fd;
-      d = a + ratio * (b - a), fd = f(d);
-    }
-  }
-  return (a + b) / 2;
 }
 
 }  // namespace
