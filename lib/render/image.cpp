@@ -313,18 +313,18 @@ Image read_linear_image(const std::filesystem::path& path) {
   throw InvalidInputError(path, "unsupported image format (use .pfm or .exr)");
 }
 
-void write_png(const std::filesystem::path& path, const Image& image, double exposure) {
+std::string encode_png(const Image& image, double exposure) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info) {
     png_destroy_write_struct(&png, &info);
-    throw IOError(path, "libpng: out of memory");
+    throw Error("libpng: out of memory");
   }
   std::string bytes;
   std::vector<std::uint8_t> row(static_cast<std::size_t>(image.width) * 3);
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw IOError(path, "libpng could not encode the image");
+    throw Error("libpng could not encode a " + std::to_string(image.width) + " x " + std::to_string(image.height) + " image");
   }
   png_set_write_fn(png, &bytes, append_png, nullptr);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8,
@@ -338,7 +338,11 @@ void write_png(const std::filesystem::path& path, const Image& image, double exp
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  write_file_atomically(path, bytes);
+  return bytes;
+}
+
+void write_png(const std::filesystem::path& path, const Image& image, double exposure) {
+  write_file_atomically(path, encode_png(image, exposure));
 }
 
 double mean_squared_error(const Image& a, const Image& b) {

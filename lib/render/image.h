@@ -3,6 +3,7 @@
 // between two.
 
 #include <filesystem>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -55,7 +56,9 @@ void write_linear_image(const std::filesystem::path& path, const Image& image);
 /// read_pfm or read_exr by the extension; InvalidInputError for any other.
 Image read_linear_image(const std::filesystem::path& path);
 
-/// 8-bit sRGB PNG of exposure * value (values above 1 clip), through libpng.
+/// 8-bit sRGB PNG of exposure * value (values above 1 clip), through libpng: the file's bytes.
+std::string encode_png(const Image& image, double exposure = 1.0);
+/// encode_png written to `path` atomically.
 void write_png(const std::filesystem::path& path, const Image& image, double exposure = 1.0);
 
 /// Mean over pixels and channels of the squared difference; both images the same size.
