@@ -1,0 +1,67 @@
+#pragma once
+// Which proxy of a folder to ship, for each way a renderer can use one: the predicted
+// efficiency against tracing the mesh (estimator/efficiency.h) of every measured proxy,
+// with its 95 % interval, and the proxy that maximises it, in one sentence per use.
+
+#include <array>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "visproxy/core/proxy_kind.h"
+#include "visproxy/estimator/efficiency.h"
+
+namespace visproxy {
+
+inline constexpr std::array<ProxyUse, 3> kProxyUses = {ProxyUse::control_variate, ProxyUse::term_choice,
+                                                       ProxyUse::bounds};
+
+struct UseFigures {
+  UsePrediction prediction;  ///< at the use's most efficient setting (predict_use)
+  Interval interval;         ///< 95 %, over the sampling of the measured rays
+};
+
+struct ProxyEfficiency {
+  std::string name;
+  double primitives = 0;
+  /// The kind whose claim is proved for the files: the entry's kind when its verdict
+  /// proves it, general otherwise (bounds then cannot use it).
+  ProxyKind proved = ProxyKind::general;
+  std::array<UseFigures, 3> uses;  ///< in the order of kProxyUses
+};
+
+struct UseChoice {
+  ProxyUse use = ProxyUse::control_variate;
+  /// Index into Recommendation::proxies of the most efficient usable proxy; -1 when none
+  /// is usable (no proxy measured, costs not timed, no proved proxy for bounds).
+  int best = -1;
+  /// One sentence: "For shadow rays through the control variate, outer-512 is predicted
+  /// 1.83x [1.61, 2.04] cheaper than the mesh at equal error." Cheaper only when the whole
+  /// interval is above 1; "no proxy is predicted cheaper" when it is below 1; "as
+  /// efficient as the mesh" when it holds 1. A runner-up whose interval reaches the best's
+  /// is named.
+  std::string sentence;
+};
+
+struct Recommendation {
+  std::string rays;  ///< the rays it was predicted on, in words
+  std::uint64_t seed = 0;
+  std::vector<ProxyEfficiency> proxies;  ///< every measured proxy, in manifest order
+  std::array<UseChoice, 3> choices;      ///< in the order of kProxyUses
+};
+
+/// Decides the kind proved for a manifest entry (from its verify object and the files).
+using ProvedKind = std::function<ProxyKind(const nlohmann::json& entry)>;
+
+/// The recommendation from a measured manifest: each entry with a `measure` object (its
+/// ray-type counts and costs per ray) is predicted for every use, its interval drawn with
+/// the measurement's seed. Entries not measured are left out.
+Recommendation recommend_proxies(const nlohmann::json& manifest, const ProvedKind& proved_kind);
+
+/// recommendation.json (data/schemas/recommendation.schema.json): the rays, the seed, one
+/// object per use with the sentence and the chosen proxy, and every proxy's figures.
+/// Unbounded efficiencies (a use with no variance where the mesh has some) are null.
+nlohmann::json recommendation_json(const Recommendation& recommendation, const nlohmann::json& manifest);
+
+}  // namespace visproxy
