@@ -51,7 +51,7 @@ if [ "$mode" = demo ]; then
   ./build/release/apps/visproxy verify "$mesh" "$out"
   ./build/release/apps/visproxy measure "$mesh" "$out"
   ./build/release/apps/visproxy report "$out"
-  echo "visproxy: report of the bunny's proxies: $out/report.html (and report.md, f_miss.svg)"
+  echo "visproxy: report of the bunny's proxies: $out/report.html (and report.md, recommendation.json, f_miss.svg, efficiency.svg, pictures/)"
 else
   ctest --preset release
 fi

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -259,7 +260,7 @@ json process_asset(const fs::path& mesh_path, const fs::path& root, const BatchO
                                {.rays = options.rays, .seed = options.seed, .scene = {}, .timing = {.rays = options.timed_rays},
                                 .on_start = {}, .on_warning = warn});
     write_manifest(partial, manifest);
-    write_report(partial, manifest);
+    write_report(partial, manifest, mesh);
     record["proxies"] = manifest["proxies"].size();
     record["claims_holding"] = holding;
     record["status"] = holding == manifest["proxies"].size() ? "ok" : "claims_failed";
@@ -315,7 +316,25 @@ json batch_merge(const fs::path& root) {
     const std::string status = record.value("status", "failed");
     ok += status == "ok", claims_failed += status == "claims_failed", failed += status == "failed";
     if (status == "failed") continue;
-    const nlohmann::json manifest = read_manifest(root / record["folder"].get<std::string>());
+    const fs::path folder = root / record["folder"].get<std::string>();
+    const nlohmann::json manifest = read_manifest(folder);
+    // The predicted efficiencies of the asset's report, by proxy.
+    // (A folder from before recommendations, or one whose file was damaged, has none.)
+    std::map<std::string, json> predicted;
+    if (fs::exists(folder / "recommendation.json", error)) {
+      json recommendation;
+      try {
+        recommendation = json::parse(read_file(folder / "recommendation.json"));
+      } catch (const json::exception&) {
+      }
+      if (recommendation.is_object() && recommendation.contains("proxies") && recommendation["proxies"].is_array())
+        for (const json& p : recommendation["proxies"])
+          if (p.is_object() && p.contains("name") && p["name"].is_string()) predicted[p["name"].get<std::string>()] = p;
+    }
+    auto efficiency = [&](const json& entry, const char* use) {
+      const auto found = predicted.find(entry["name"].get<std::string>());
+      return found == predicted.end() ? std::nan("") : value_at(found->second, {use, "efficiency"});
+    };
     for (const json& entry : manifest["proxies"]) {
       ++proxies;
       const json* verify = entry.contains("verify") ? &entry["verify"] : nullptr;
@@ -332,7 +351,10 @@ json batch_merge(const fs::path& root) {
                       {"gssa_ratio", value_at(entry, {"measure", "gssa_ratio", "value"})},
                       {"variance", value_at(entry, {"measure", "variance", "optimal"})},
                       {"cost_ratio", value_at(entry, {"measure", "cost_ns_per_ray", "proxy_over_mesh"})},
-                      {"build_seconds", entry.value("build_seconds", std::nan(""))}});
+                      {"build_seconds", entry.value("build_seconds", std::nan(""))},
+                      {"efficiency_control_variate", efficiency(entry, "control_variate")},
+                      {"efficiency_eq8", efficiency(entry, "eq8")},
+                      {"efficiency_bounds", efficiency(entry, "bounds")}});
     }
   }
   // NaN is not JSON: unmeasured figures are null.
@@ -347,13 +369,15 @@ json batch_merge(const fs::path& root) {
                {"claims_failed", claims_failed},
                {"failed", failed},
                {"proxies", proxies},
-               {"timed_fields", {"seconds", "build_seconds", "cost_ratio"}},
+               {"timed_fields", {"seconds", "build_seconds", "cost_ratio", "efficiency_control_variate", "efficiency_eq8",
+                                 "efficiency_bounds"}},
                {"records", records},
                {"rows", rows},
                {"visproxy_version", version()}};
 
   const std::vector<std::string> columns{"asset", "folder", "triangles", "proxy", "kind", "primitives", "claim", "holds",
-                                         "f_hit", "f_miss", "gssa_ratio", "variance", "cost_ratio", "build_seconds"};
+                                         "f_hit", "f_miss", "gssa_ratio", "variance", "cost_ratio", "build_seconds",
+                                         "efficiency_control_variate", "efficiency_eq8", "efficiency_bounds"};
   auto cell_text = [](const json& value) -> std::string {
     if (value.is_null()) return "";
     if (value.is_string()) return value.get<std::string>();
@@ -404,7 +428,9 @@ json batch_merge(const fs::path& root) {
   after += "<p class=\"notes\">f_hit: of the isotropic lines the mesh blocks, the fraction the proxy blocks; f_miss: of the "
            "free lines, the fraction the proxy lets through; GSSA ratio: proxy-blocked over mesh-blocked lines; variance: "
            "the stochastic estimator's per ray at its optimal probabilities; cost ratio: proxy time per ray over the "
-           "mesh's on one core; build seconds: wall time. Written by visproxy " +
+           "mesh's on one core; build seconds: wall time; efficiency: how many times cheaper than tracing the mesh alone "
+           "each use of the proxy is predicted to be at equal error (its report's recommendation; bounds only for proved "
+           "claims). Written by visproxy " +
            std::string(version()) + " from the asset records in this folder.</p>\n";
   const std::string html = sortable_table_page("visproxy batch: " + root.generic_string(), before, columns, table, after);
 

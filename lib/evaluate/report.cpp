@@ -1,11 +1,18 @@
 #include "visproxy/evaluate/report.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <vector>
 
+#include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/evaluate/plot.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/render/image.h"
 
 namespace visproxy {
 namespace {
@@ -132,87 +139,135 @@ std::string svg_color(const std::string& kind) {
   return "#d62728";
 }
 
+const char* kUseColors[] = {"#9467bd", "#ff7f0e", "#17becf"};
+
+std::string base64(const std::string& bytes) {
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
+    std::uint32_t word = 0;
+    for (std::size_t k = 0; k < 3; ++k) word = word << 8 | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 4; ++k) out += k <= n ? digits[(word >> (18 - 6 * k)) & 63] : '=';
+  }
+  return out;
+}
+
+std::string percent(double fraction) { return std::isnan(fraction) ? "—" : format("%.1f %%", 100 * fraction); }
+
+// The recommendation's sentences, and what they rest on.
+std::string recommendation_intro(const Recommendation& r) {
+  if (r.proxies.empty()) return "";
+  return "Predicted on " + r.rays + " (seed " + std::to_string(r.seed) +
+         "): efficiency is how many times cheaper than tracing the mesh alone a use is at equal error, 1 / (variance x "
+         "cost) against the mesh's, with each use at its most efficient probabilities; intervals are 95 % over the "
+         "sampling of the rays, costs as timed.";
+}
+
+bool has_recommendation(const ReportFigures& figures) { return !figures.recommendation.choices[0].sentence.empty(); }
+
+const char* kPictureNotes =
+    "Each proxy drawn over the mesh (translucent, its silhouette and creases outlined; blue outside, green inside, red "
+    "general; an inside proxy shows through the mesh), then the ground below the mesh seen from straight above under a "
+    "square area light above and to one side: the mesh's shadow, the proxy's, and their difference (red: shadow of the "
+    "mesh the proxy misses; blue: shadow the proxy adds). Missed and extra shadow are over the pictured ground, as "
+    "fractions of the mesh's shadow. The up axis is +y; every ground point sees the same grid of points on the light.";
+
 }  // namespace
 
 std::string f_miss_plot_svg(const json& manifest) {
-  const double width = 720, height = 420, left = 70, right = 170, top = 50, bottom = 60;
-  const double plot_w = width - left - right, plot_h = height - top - bottom;
-  struct Point {
-    std::string name, kind;
-    double primitives, value, lower, upper;
-  };
-  std::vector<Point> points;
+  std::vector<ScatterGroup> groups;
+  for (const char* kind : {"outside", "inside", "general"})
+    groups.push_back({std::string(kind) + " proxy", svg_color(kind), {}, false, false});
   for (const json& entry : manifest.at("proxies")) {
     const double value = number(entry, {"measure", "f_miss", "value"});
     const double primitives = number(entry, {"primitives"});
     if (std::isnan(value) || !(primitives > 0)) continue;
-    points.push_back({entry.value("name", "?"), entry.value("kind", "general"), primitives, value,
-                      number(entry, {"measure", "f_miss", "lower"}, value), number(entry, {"measure", "f_miss", "upper"}, value)});
+    const std::string kind = entry.value("kind", "general");
+    ScatterPoint point{primitives, value, number(entry, {"measure", "f_miss", "lower"}, value),
+                       number(entry, {"measure", "f_miss", "upper"}, value), entry.value("name", "?"), ""};
+    point.tooltip = point.label + ": f_miss " + format("%.4f", value) + " [" + format("%.4f", point.y_lower) + ", " +
+                    format("%.4f", point.y_upper) + "], " + format("%.0f", primitives) + " primitives";
+    groups[kind == "outside" ? 0 : kind == "inside" ? 1 : 2].points.push_back(point);
   }
-  std::string svg = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + format("%.0f", width) + "\" height=\"" +
-                    format("%.0f", height) + "\" viewBox=\"0 0 " + format("%.0f", width) + " " + format("%.0f", height) +
-                    "\" font-family=\"sans-serif\" font-size=\"12\">\n";
-  svg += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  svg += "<text x=\"" + format("%.0f", width / 2) + "\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">f_miss against primitive count: " +
-         escape_html(manifest.at("mesh").value("path", "?")) + "</text>\n";
-  if (points.empty()) {
-    svg += "<text x=\"" + format("%.0f", width / 2) + "\" y=\"" + format("%.0f", height / 2) +
-           "\" text-anchor=\"middle\">No proxy measured yet (visproxy measure MESH DIR)</text>\n</svg>\n";
-    return svg;
-  }
-  double log_min = std::floor(std::log10(std::min_element(points.begin(), points.end(), [](auto& a, auto& b) { return a.primitives < b.primitives; })->primitives));
-  double log_max = std::ceil(std::log10(std::max_element(points.begin(), points.end(), [](auto& a, auto& b) { return a.primitives < b.primitives; })->primitives));
-  if (log_max <= log_min) log_max = log_min + 1;
-  auto x_of = [&](double primitives) { return left + plot_w * (std::log10(primitives) - log_min) / (log_max - log_min); };
-  auto y_of = [&](double value) { return top + plot_h * (1 - value); };
-  // Axes, grid and ticks.
-  svg += "<g stroke=\"#ccc\">\n";
-  for (int i = 0; i <= 10; i += 2)
-    svg += "<line x1=\"" + format("%.1f", left) + "\" x2=\"" + format("%.1f", left + plot_w) + "\" y1=\"" +
-           format("%.1f", y_of(i / 10.0)) + "\" y2=\"" + format("%.1f", y_of(i / 10.0)) + "\"/>\n";
-  for (double e = log_min; e <= log_max; ++e)
-    svg += "<line x1=\"" + format("%.1f", x_of(std::pow(10, e))) + "\" x2=\"" + format("%.1f", x_of(std::pow(10, e))) +
-           "\" y1=\"" + format("%.1f", top) + "\" y2=\"" + format("%.1f", top + plot_h) + "\"/>\n";
-  svg += "</g>\n<g>\n";
-  for (int i = 0; i <= 10; i += 2)
-    svg += "<text x=\"" + format("%.1f", left - 8) + "\" y=\"" + format("%.1f", y_of(i / 10.0) + 4) +
-           "\" text-anchor=\"end\">" + format("%.1f", i / 10.0) + "</text>\n";
-  for (double e = log_min; e <= log_max; ++e)
-    svg += "<text x=\"" + format("%.1f", x_of(std::pow(10, e))) + "\" y=\"" + format("%.1f", top + plot_h + 18) +
-           "\" text-anchor=\"middle\">" + format("%.0f", std::pow(10, e)) + "</text>\n";
-  svg += "<text x=\"" + format("%.1f", left + plot_w / 2) + "\" y=\"" + format("%.1f", height - 15) +
-         "\" text-anchor=\"middle\">primitives (boxes, triangles or spheres; log scale)</text>\n";
-  svg += "<text transform=\"translate(18 " + format("%.1f", top + plot_h / 2) +
-         ") rotate(-90)\" text-anchor=\"middle\">f_miss (fraction of free rays the proxy lets through)</text>\n";
-  svg += "<rect x=\"" + format("%.1f", left) + "\" y=\"" + format("%.1f", top) + "\" width=\"" + format("%.1f", plot_w) +
-         "\" height=\"" + format("%.1f", plot_h) + "\" fill=\"none\" stroke=\"black\"/>\n</g>\n";
-  // Points with their intervals and labels.
-  for (const Point& p : points) {
-    const std::string color = svg_color(p.kind);
-    const double x = x_of(p.primitives);
-    svg += "<g class=\"proxy\"><title>" + escape_html(p.name) + ": f_miss " + format("%.4f", p.value) + " [" +
-           format("%.4f", p.lower) + ", " + format("%.4f", p.upper) + "], " + format("%.0f", p.primitives) +
-           " primitives</title>";
-    svg += "<line x1=\"" + format("%.1f", x) + "\" x2=\"" + format("%.1f", x) + "\" y1=\"" + format("%.1f", y_of(p.lower)) +
-           "\" y2=\"" + format("%.1f", y_of(p.upper)) + "\" stroke=\"" + color + "\"/>";
-    svg += "<circle cx=\"" + format("%.1f", x) + "\" cy=\"" + format("%.1f", y_of(p.value)) + "\" r=\"4\" fill=\"" + color + "\"/>";
-    svg += "<text x=\"" + format("%.1f", x + 7) + "\" y=\"" + format("%.1f", y_of(p.value) + 4) + "\" font-size=\"10\">" +
-           escape_html(p.name) + "</text></g>\n";
-  }
-  // Legend.
-  double legend_y = top + 10;
-  for (const char* kind : {"outside", "inside", "general"}) {
-    svg += "<circle cx=\"" + format("%.1f", width - right + 20) + "\" cy=\"" + format("%.1f", legend_y) + "\" r=\"4\" fill=\"" +
-           svg_color(kind) + "\"/><text x=\"" + format("%.1f", width - right + 30) + "\" y=\"" + format("%.1f", legend_y + 4) +
-           "\">" + kind + " proxy</text>\n";
-    legend_y += 18;
-  }
-  svg += "</svg>\n";
-  return svg;
+  return scatter_plot_svg(groups, {.title = "f_miss against primitive count: " + manifest.at("mesh").value("path", "?"),
+                                   .x_label = "primitives (boxes, triangles or spheres; log scale)",
+                                   .y_label = "f_miss (fraction of free rays the proxy lets through)",
+                                   .log_x = true,
+                                   .y_min = 0,
+                                   .y_max = 1,
+                                   .empty_note = "No proxy measured yet (visproxy measure MESH DIR)"});
 }
 
-std::string report_markdown(const json& manifest) {
+std::string efficiency_plot_svg(const json& manifest, const Recommendation& r) {
+  std::vector<ScatterGroup> groups;
+  for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
+    ScatterGroup group{std::string(use_name(kProxyUses[u])), kUseColors[u], {}, true, true};
+    for (const ProxyEfficiency& p : r.proxies) {
+      const UseFigures& f = p.uses[u];
+      if (!f.prediction.usable) continue;
+      ScatterPoint point{p.primitives, f.prediction.efficiency, f.interval.lower, f.interval.upper, p.name, ""};
+      point.tooltip = p.name + ", " + std::string(use_name(kProxyUses[u])) + ": " + format("%.3g", point.y) + "x [" +
+                      format("%.3g", point.y_lower) + ", " + format("%.3g", point.y_upper) + "], " +
+                      format("%.0f", p.primitives) + " primitives";
+      group.points.push_back(point);
+    }
+    groups.push_back(std::move(group));
+  }
+  return scatter_plot_svg(groups, {.title = "Predicted efficiency against primitive count: " + manifest.at("mesh").value("path", "?"),
+                                   .x_label = "primitives (boxes, triangles or spheres; log scale)",
+                                   .y_label = "efficiency against the mesh (log scale)",
+                                   .log_x = true,
+                                   .log_y = true,
+                                   .reference_y = 1,
+                                   .reference_label = "the mesh alone",
+                                   .empty_note = "No proxy measured yet (visproxy measure MESH DIR)"});
+}
+
+std::string picture_stem(const std::string& proxy_name) {
+  std::string stem = proxy_name.empty() ? std::string("proxy") : proxy_name;
+  for (char& c : stem)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_') c = '_';
+  if (stem.front() == '.') stem.front() = '_';
+  return stem;
+}
+
+ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::path& folder, const json& manifest,
+                             const ReportOptions& options) {
+  ReportFigures figures;
+  figures.picture_options = options.picture_options;
+  std::map<std::string, InstanceProxy> proxies;
+  for (const json& entry : manifest.at("proxies")) {
+    const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
+    const bool proved = entry.contains("verify") && verdict_proves(entry["verify"], mesh, geometry);
+    proxies[entry.at("name").get<std::string>()] =
+        InstanceProxy{entry_kind(entry), entry.value("spec", std::string()), geometry.mesh, geometry.spheres, proved};
+  }
+  figures.recommendation = recommend_proxies(manifest, [&](const json& entry) {
+    const InstanceProxy& proxy = proxies.at(entry.at("name").get<std::string>());
+    return proxy.proved ? proxy.kind : ProxyKind::general;
+  });
+  if (!options.pictures) return figures;
+  const ProxyPictureStage stage(mesh, options.picture_options);
+  figures.mesh_shadow_png = encode_png(stage.mesh_shadow());
+  for (const auto& [name, proxy] : proxies) {
+    const ProxyPictures pictures = stage.pictures(proxy);
+    figures.pictures[name] = {encode_png(pictures.overlay), encode_png(pictures.shadow), encode_png(pictures.difference),
+                              pictures.missed_shadow, pictures.extra_shadow};
+  }
+  figures.pictured = true;
+  return figures;
+}
+
+std::string report_markdown(const json& manifest, const ReportFigures& figures) {
   std::string md = "# visproxy report: " + manifest.at("mesh").value("path", "?") + "\n\n";
+  if (has_recommendation(figures)) {
+    md += "## Recommendation\n\n";
+    for (const UseChoice& choice : figures.recommendation.choices) md += "- " + choice.sentence + "\n";
+    const std::string intro = recommendation_intro(figures.recommendation);
+    md += (intro.empty() ? std::string() : "\n" + intro + " Every proxy's figures: recommendation.json.\n") + "\n";
+  }
   md += "Mesh: " + mesh_summary(manifest) + ".\n\n" + ray_summary(manifest) + "\n\n";
   const std::vector<std::string> head = headers();
   md += "|";
@@ -225,7 +280,24 @@ std::string report_markdown(const json& manifest) {
     for (const Cell& cell : row(entry)) md += " " + cell.text + " |";
     md += "\n";
   }
-  md += "\n" + std::string(kColumnNotes) + "\n\n![f_miss against primitive count](f_miss.svg)\n\n";
+  md += "\n" + std::string(kColumnNotes) + "\n\n";
+  if (figures.pictured) {
+    md += "## Proxies and their shadows\n\n" + std::string(kPictureNotes) + "\n\n";
+    md += "| proxy | over the mesh | the mesh's shadow | the proxy's shadow | difference | missed shadow | extra shadow |\n";
+    md += "| --- | --- | --- | --- | --- | ---: | ---: |\n";
+    for (const auto& entry : manifest.at("proxies")) {
+      const std::string name = entry.at("name").get<std::string>();
+      const auto found = figures.pictures.find(name);
+      if (found == figures.pictures.end()) continue;
+      const std::string stem = "pictures/" + picture_stem(name);
+      md += "| " + name + " | ![" + name + " over the mesh](" + stem + "-overlay.png) | ![the mesh's shadow](pictures/mesh-shadow.png) | ![" +
+            name + "'s shadow](" + stem + "-shadow.png) | ![difference](" + stem + "-difference.png) | " +
+            percent(found->second.missed_shadow) + " | " + percent(found->second.extra_shadow) + " |\n";
+    }
+    md += "\n";
+  }
+  md += "![f_miss against primitive count](f_miss.svg)\n\n";
+  if (has_recommendation(figures)) md += "![predicted efficiency against primitive count](efficiency.svg)\n\n";
   md += "Written by " + manifest.value("generator", std::string("visproxy")) + " from manifest.json.\n";
   return md;
 }
@@ -257,6 +329,11 @@ std::string sortable_table_page(const std::string& title, const std::string& bef
                      "td.number { text-align: right; font-variant-numeric: tabular-nums; }\n"
                      "td.fails { color: #b00; font-weight: bold; }\n"
                      "p.notes { max-width: 60em; font-size: 13px; color: #444; }\n"
+                     "#recommendation li { margin: 0.3em 0; max-width: 60em; }\n"
+                     "figure.proxy { margin: 1em 0; }\n"
+                     "figure.proxy .strip { display: flex; gap: 8px; flex-wrap: wrap; }\n"
+                     "figure.proxy .strip div { display: flex; flex-direction: column; font-size: 12px; color: #444; }\n"
+                     "figure.proxy img { border: 1px solid #bbb; image-rendering: auto; }\n"
                      "</style>\n</head>\n<body>\n";
   html += "<h1>" + escape_html(title) + "</h1>\n" + before_table;
   html += "<table id=\"sortable\">\n<thead><tr>";
@@ -304,7 +381,7 @@ std::string sortable_table_page(const std::string& title, const std::string& bef
   return html;
 }
 
-std::string report_html(const json& manifest) {
+std::string report_html(const json& manifest, const ReportFigures& figures) {
   const std::string title = "visproxy report: " + manifest.at("mesh").value("path", "?");
   std::vector<std::vector<HtmlCell>> rows;
   for (const json& entry : manifest.at("proxies")) {
@@ -319,18 +396,69 @@ std::string report_html(const json& manifest) {
     }
     rows.push_back(std::move(cells));
   }
-  const std::string before = "<p>Mesh: " + escape_html(mesh_summary(manifest)) + ".</p>\n<p>" + escape_html(ray_summary(manifest)) + "</p>\n";
-  const std::string after = "<p class=\"notes\">" + escape_html(kColumnNotes) + " Click a column header to sort.</p>\n" +
-                            "<figure>\n" + f_miss_plot_svg(manifest) + "</figure>\n" +
-                            "<p class=\"notes\">Written by " + escape_html(manifest.value("generator", std::string("visproxy"))) +
-                            " from manifest.json.</p>\n";
+  std::string before;
+  if (has_recommendation(figures)) {
+    before += "<section id=\"recommendation\">\n<h2>Recommendation</h2>\n<ul>\n";
+    for (const UseChoice& choice : figures.recommendation.choices)
+      before += "<li data-use=\"" + std::string(use_key(choice.use)) + "\">" + escape_html(choice.sentence) + "</li>\n";
+    before += "</ul>\n<p class=\"notes\">" + escape_html(recommendation_intro(figures.recommendation)) +
+              " Every proxy's figures are in recommendation.json and in the efficiency plot below.</p>\n</section>\n";
+  }
+  before += "<p>Mesh: " + escape_html(mesh_summary(manifest)) + ".</p>\n<p>" + escape_html(ray_summary(manifest)) + "</p>\n";
+  std::string after = "<p class=\"notes\">" + escape_html(kColumnNotes) + " Click a column header to sort.</p>\n";
+  if (figures.pictured) {
+    auto image = [](const std::string& png, const std::string& alt, int size) {
+      return "<img alt=\"" + escape_html(alt) + "\" width=\"" + std::to_string(size) + "\" height=\"" + std::to_string(size) +
+             "\" src=\"data:image/png;base64," + base64(png) + "\">";
+    };
+    const int size = figures.picture_options.size;
+    after += "<section id=\"pictures\">\n<h2>Proxies and their shadows</h2>\n<p class=\"notes\">" + escape_html(kPictureNotes) + "</p>\n";
+    for (const json& entry : manifest.at("proxies")) {
+      const std::string name = entry.at("name").get<std::string>();
+      const auto found = figures.pictures.find(name);
+      if (found == figures.pictures.end()) continue;
+      const ProxyPictureFiles& p = found->second;
+      after += "<figure class=\"proxy\" data-proxy=\"" + escape_html(name) + "\">\n<figcaption><b>" + escape_html(name) + "</b>, " +
+               escape_html(entry.value("kind", std::string("?"))) + ", " + escape_html(row(entry)[2].text) + ": missed shadow " +
+               percent(p.missed_shadow) + ", extra shadow " + percent(p.extra_shadow) + "</figcaption>\n<div class=\"strip\">";
+      for (const auto& [png, label] : {std::pair{&p.overlay_png, name + " over the mesh"}, std::pair{&figures.mesh_shadow_png, std::string("the mesh's shadow")},
+                                       std::pair{&p.shadow_png, name + "'s shadow"}, std::pair{&p.difference_png, std::string("difference")}})
+        after += "<div>" + image(*png, label, size) + "<span>" + escape_html(label) + "</span></div>";
+      after += "</div>\n</figure>\n";
+    }
+    after += "</section>\n";
+  }
+  after += "<figure>\n" + f_miss_plot_svg(manifest) + "</figure>\n";
+  if (has_recommendation(figures)) after += "<figure>\n" + efficiency_plot_svg(manifest, figures.recommendation) + "</figure>\n";
+  after += "<p class=\"notes\">Written by " + escape_html(manifest.value("generator", std::string("visproxy"))) + " from manifest.json.</p>\n";
   return sortable_table_page(title, before, headers(), rows, after);
 }
 
-void write_report(const std::filesystem::path& folder, const json& manifest) {
+void write_report(const std::filesystem::path& folder, const json& manifest, const ReportFigures& figures) {
+  if (figures.pictured) {
+    const std::filesystem::path pictures = folder / "pictures";
+    std::error_code error;
+    std::filesystem::create_directories(pictures, error);
+    if (error) throw IOError(pictures, "cannot create the pictures folder: " + error.message());
+    write_file_atomically(pictures / "mesh-shadow.png", figures.mesh_shadow_png);
+    for (const auto& [name, p] : figures.pictures) {
+      const std::string stem = picture_stem(name);
+      write_file_atomically(pictures / (stem + "-overlay.png"), p.overlay_png);
+      write_file_atomically(pictures / (stem + "-shadow.png"), p.shadow_png);
+      write_file_atomically(pictures / (stem + "-difference.png"), p.difference_png);
+    }
+  }
   write_file_atomically(folder / "f_miss.svg", f_miss_plot_svg(manifest));
-  write_file_atomically(folder / "report.md", report_markdown(manifest));
-  write_file_atomically(folder / "report.html", report_html(manifest));
+  if (has_recommendation(figures)) {
+    write_file_atomically(folder / "efficiency.svg", efficiency_plot_svg(manifest, figures.recommendation));
+    write_file_atomically(folder / "recommendation.json", recommendation_json(figures.recommendation, manifest).dump(2) + "\n");
+  }
+  write_file_atomically(folder / "report.md", report_markdown(manifest, figures));
+  write_file_atomically(folder / "report.html", report_html(manifest, figures));
+}
+
+void write_report(const std::filesystem::path& folder, const json& manifest, const TriangleMesh& mesh, const ReportOptions& options) {
+  write_report(folder, manifest, report_figures(mesh, folder, manifest, options));
 }
 
 }  // namespace visproxy

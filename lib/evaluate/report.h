@@ -1,22 +1,62 @@
 #pragma once
-// `visproxy report`: the proxy folder as a document a person reads.
+// `visproxy report`: the proxy folder as a document a person reads: which proxy to ship
+// for each use (recommendation.h), every proxy drawn over the mesh with the shadow it casts
+// beside the mesh's (render/proxy_pictures.h), the measured figures in a sortable table,
+// and plots of f_miss and of predicted efficiency against primitive count.
 
-#include <filesystem>
-#include <nlohmann/json.hpp>
 #include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "visproxy/evaluate/recommendation.h"
+#include "visproxy/mesh/triangle_mesh.h"
+#include "visproxy/render/proxy_pictures.h"
+
 namespace visproxy {
 
-/// report.md: the mesh summary, the ray set, one table row per proxy (kind, primitives,
-/// build time, verdict, f_hit, f_miss, V_avg, GSSA ratio, p1/p2/p3, variance, cost
-/// ratio), the column definitions, and a link to the plot.
-std::string report_markdown(const nlohmann::json& manifest);
+/// One proxy's pictures as PNG files' bytes, and the shadow fractions the difference shows.
+struct ProxyPictureFiles {
+  std::string overlay_png, shadow_png, difference_png;
+  double missed_shadow = 0, extra_shadow = 0;  ///< ProxyPictures' (NaN: the mesh casts no shadow)
+};
 
-/// report.html: the same, self-contained (no external file, script or font), with a
-/// table sortable by any column and the plot inline.
-std::string report_html(const nlohmann::json& manifest);
+/// What the report computes from the files rather than reads from the manifest.
+struct ReportFigures {
+  Recommendation recommendation;
+  bool pictured = false;         ///< the pictures were made
+  std::string mesh_shadow_png;   ///< the ground with the mesh's shadow
+  std::map<std::string, ProxyPictureFiles> pictures;  ///< by proxy name
+  ProxyPictureOptions picture_options;
+};
+
+struct ReportOptions {
+  bool pictures = true;  ///< render the pictures (a few seconds for a folder of ten proxies)
+  ProxyPictureOptions picture_options;
+};
+
+/// The recommendation and the pictures of every proxy of FOLDER. `mesh` is the mesh the
+/// folder was built from (read_manifest_mesh): a proxy's claim counts as proved only when
+/// its verdict was made on these very files (verdict_proves), for the recommendation's
+/// bounds and for the pictures' rounding pads. Throws InvalidInputError naming a proxy file
+/// that cannot be read.
+ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::path& folder, const nlohmann::json& manifest,
+                             const ReportOptions& options = {});
+
+/// report.md: the recommendation, the mesh summary, the ray set, one table row per proxy
+/// (kind, primitives, build time, verdict, f_hit, f_miss, V_avg, GSSA ratio, p1/p2/p3,
+/// variance, cost ratio), the column definitions, the pictures and the plots by link.
+std::string report_markdown(const nlohmann::json& manifest, const ReportFigures& figures = {});
+
+/// report.html: the same, self-contained (no external file, script or font: pictures and
+/// plots inline), with a table sortable by any column.
+std::string report_html(const nlohmann::json& manifest, const ReportFigures& figures = {});
+
+/// An SVG plot of each proxy's predicted efficiency for each use (with its 95 % interval)
+/// against primitive count, log-log, each use's Pareto front joined and labelled, the mesh alone at 1.
+std::string efficiency_plot_svg(const nlohmann::json& manifest, const Recommendation& recommendation);
 
 /// An SVG plot of f_miss (with its 95 % interval) against primitive count, log scale,
 /// one point per measured proxy, coloured by kind; a note instead of points when no
@@ -43,7 +83,17 @@ std::string sortable_table_page(const std::string& title, const std::string& bef
                                 const std::vector<std::string>& headers, const std::vector<std::vector<HtmlCell>>& rows,
                                 const std::string& after_table);
 
-/// Writes report.md, report.html and f_miss.svg into `folder`, each atomically.
-void write_report(const std::filesystem::path& folder, const nlohmann::json& manifest);
+/// Writes report.md, report.html, f_miss.svg, efficiency.svg, recommendation.json and the
+/// pictures (pictures/mesh-shadow.png, pictures/NAME-overlay.png, -shadow.png and
+/// -difference.png) into `folder`, each file atomically.
+void write_report(const std::filesystem::path& folder, const nlohmann::json& manifest, const ReportFigures& figures);
+
+/// report_figures, then write_report.
+void write_report(const std::filesystem::path& folder, const nlohmann::json& manifest, const TriangleMesh& mesh,
+                  const ReportOptions& options = {});
+
+/// The file name pictures of a proxy start with: its name with every character but letters,
+/// digits, '.', '-' and '_' replaced by '_'.
+std::string picture_stem(const std::string& proxy_name);
 
 }  // namespace visproxy

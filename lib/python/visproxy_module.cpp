@@ -29,6 +29,7 @@
 #include "visproxy/evaluate/batch.h"
 #include "visproxy/evaluate/measure_proxies.h"
 #include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/report.h"
 #include "visproxy/evaluate/scene_proxies.h"
 #include "visproxy/evaluate/verify_proxy.h"
 #include "visproxy/inspect/mesh_report.h"
@@ -374,6 +375,22 @@ py::object read_manifest_dict(const std::filesystem::path& folder) {
   return to_python(manifest);
 }
 
+py::object write_folder_report(const std::filesystem::path& folder, const std::optional<std::filesystem::path>& mesh,
+                               bool pictures, int picture_size) {
+  json recommendation;
+  {
+    py::gil_scoped_release release;
+    const json manifest = read_manifest(folder);
+    const TriangleMesh read = read_manifest_mesh(mesh ? *mesh : std::filesystem::path(manifest["mesh"]["path"].get<std::string>()),
+                                                 manifest);
+    const ReportFigures figures =
+        report_figures(read, folder, manifest, {.pictures = pictures, .picture_options = {.size = picture_size}});
+    write_report(folder, manifest, figures);
+    recommendation = recommendation_json(figures.recommendation, manifest);
+  }
+  return to_python(recommendation);
+}
+
 json mesh_manifest(const TriangleMesh& mesh) {
   const BoundingBox box = bounding_box(mesh);
   return {{"mesh", {{"bbox", {{"diagonal", box.diagonal()}}}}}};
@@ -609,6 +626,13 @@ PYBIND11_MODULE(visproxy, m) {
         "Traces every proxy with the same seeded isotropic lines as the mesh (or a scene's shadow segments, `scene`), as "
         "'visproxy measure' does. Returns one measure dict per proxy: counts, f_hit, f_miss, v_avg, gssa_ratio (value, "
         "lower, upper at 95 %), optimal probabilities, variance, cost_ns_per_ray.");
+  m.def("report", &write_folder_report, "folder"_a, py::kw_only(), "mesh"_a = py::none(), "pictures"_a = true,
+        "picture_size"_a = 192,
+        "Writes the report of a proxy folder as 'visproxy report' does (report.html, report.md, recommendation.json, "
+        "f_miss.svg, efficiency.svg and, with `pictures`, pictures/*.png) and returns the recommendation as a dict: for "
+        "each use (control_variate, eq8, bounds) the proxy with the best predicted efficiency against the mesh and its "
+        "sentence, and every proxy's figures. `mesh`: the mesh the proxies were built from [default: the path the "
+        "manifest records].");
   m.def("batch_assets", &visproxy::read_asset_list, "list"_a,
         "The meshes of a batch list, as 'visproxy batch' reads it: a text file of paths (relative to the file; blank "
         "lines and # comments skipped) or a folder searched recursively for mesh files, sorted.");

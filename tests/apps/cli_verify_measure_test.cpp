@@ -286,6 +286,13 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
     EXPECT_EQ(counts[1], 0u);     // outside proxies: nothing the bunny blocks gets past them
     EXPECT_GT(counts[0], 100u);   // the bunny does shadow part of the box
   }
+  // The recommendation is made on the scene's rays, and says so.
+  const auto report = testing::run_visproxy("report '" + folder.string() + "' --no-pictures");
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  const json recommendation = json::parse(read_file(folder / "recommendation.json"));
+  EXPECT_EQ(recommendation["rays"], "20000 shadow rays of the scene " + scene);
+  EXPECT_NE(read_file(folder / "report.md").find("Predicted on 20000 shadow rays of the scene"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(folder / "pictures"));
   // The knot is not in the Cornell box.
   const auto absent = run("measure", " --scene '" + scene + "' --rays 1000");
   EXPECT_EQ(absent.exit_code, 2);
@@ -316,21 +323,50 @@ TEST_F(CliVerifyMeasure, BadInputGetsOneLineAndExitTwo) {
   EXPECT_NE(missing.err.find("wrap.ply"), std::string::npos) << missing.err;
 }
 
-TEST_F(CliVerifyMeasure, ReportListsEveryProxyAndRendersInABrowser) {
+TEST_F(CliVerifyMeasure, ReportListsEveryProxyRecommendsOneAndRendersInABrowser) {
   ASSERT_EQ(run("verify").exit_code, 0);
   ASSERT_EQ(run("measure", " --rays 20000 --timed-rays 1000").exit_code, 0);
-  const auto result = testing::run_visproxy("report '" + proxies_.string() + "'");
+  const auto result = testing::run_visproxy("report '" + proxies_.string() + "' --picture-size 96");
   ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("For shadow rays through the control variate, "), std::string::npos) << result.out;
   const std::string markdown = read_file(proxies_ / "report.md");
   const std::string svg = read_file(proxies_ / "f_miss.svg");
   for (const char* name : {"| aabb |", "| hull |", "| wrap |", "| quadric-256 |"})
     EXPECT_NE(markdown.find(name), std::string::npos) << name;
   EXPECT_NE(markdown.find("knot1.off"), std::string::npos);
-  EXPECT_EQ(std::count(svg.begin(), svg.end(), '\n') > 0, true);
-  EXPECT_EQ(static_cast<std::size_t>(std::count(svg.begin(), svg.end(), '<') > 0), 1u);
   std::size_t points = 0;
   for (std::size_t at = 0; (at = svg.find("<circle cx", at)) != std::string::npos; ++at) ++points;
   EXPECT_EQ(points, 4u + 3u);  // one per proxy, three in the legend
+
+  // The recommendation: every proxy's figures, bounds only from the proved outside ones.
+  const json recommendation = json::parse(read_file(proxies_ / "recommendation.json"));
+  testing::expect_described(recommendation, "recommendation.schema.json");
+  ASSERT_EQ(recommendation["proxies"].size(), 4u);
+  for (const json& p : recommendation["proxies"]) {
+    const bool outside = p["name"] == "aabb" || p["name"] == "hull" || p["name"] == "wrap";
+    EXPECT_EQ(p["proved_kind"], outside ? "outside" : "general") << p["name"];
+    EXPECT_EQ(p["bounds"]["usable"], outside) << p["name"];
+  }
+  EXPECT_NE(markdown.find(recommendation["uses"]["control_variate"]["sentence"].get<std::string>()), std::string::npos);
+  // The pictures, as files and in the page.
+  for (const char* file : {"mesh-shadow.png", "aabb-overlay.png", "hull-shadow.png", "wrap-difference.png", "quadric-256-overlay.png"})
+    EXPECT_TRUE(std::filesystem::is_regular_file(proxies_ / "pictures" / file)) << file;
+  const std::string html = read_file(proxies_ / "report.html");
+  std::size_t images = 0;
+  for (std::size_t at = 0; (at = html.find("src=\"data:image/png;base64,", at)) != std::string::npos; ++at) ++images;
+  EXPECT_EQ(images, 4u * 4u);
+
+  // A proxy edited by hand after verify: its verdict no longer proves it, so bounds drop it.
+  {
+    TriangleMesh hull = read_mesh(proxies_ / "hull.ply");
+    hull.positions[0] *= 1.001;
+    write_mesh(proxies_ / "hull.ply", hull);
+  }
+  ASSERT_EQ(testing::run_visproxy("report '" + proxies_.string() + "' --no-pictures").exit_code, 0);
+  const json edited = json::parse(read_file(proxies_ / "recommendation.json"));
+  EXPECT_EQ(edited["proxies"][1]["name"], "hull");
+  EXPECT_EQ(edited["proxies"][1]["proved_kind"], "general");
+  EXPECT_EQ(edited["proxies"][1]["bounds"]["usable"], false);
 
   const std::string chromium = VISPROXY_CHROMIUM;
   if (chromium.empty()) GTEST_SKIP() << "chromium not found at configure time (cmake/bootstrap.sh test installs it)";
@@ -346,6 +382,24 @@ TEST_F(CliVerifyMeasure, ReportListsEveryProxyAndRendersInABrowser) {
   EXPECT_EQ(rows, 1u + 4u);
   EXPECT_NE(dom.find(">quadric-256<"), std::string::npos);
   EXPECT_NE(dom.find("<svg"), std::string::npos);
+}
+
+TEST_F(CliVerifyMeasure, ReportNeedsTheMeshItWasBuiltFrom) {
+  const std::string other = testing::cgal_mesh("knot2.off").string();
+  const auto wrong = testing::run_visproxy("report '" + proxies_.string() + "' --mesh '" + other + "'");
+  EXPECT_EQ(wrong.exit_code, 2);
+  EXPECT_NE(wrong.err.find("knot2.off: is not the mesh the proxies were built from"), std::string::npos) << wrong.err;
+  // A manifest whose mesh is not where it says: the mesh is named, with the way out.
+  json m = manifest();
+  m["mesh"]["path"] = (folder_ / "moved.off").string();
+  write_file_atomically(proxies_ / "manifest.json", m.dump(2));
+  const auto moved = testing::run_visproxy("report '" + proxies_.string() + "'");
+  EXPECT_EQ(moved.exit_code, 2);
+  EXPECT_EQ(moved.err.find('\n'), moved.err.size() - 1) << moved.err;
+  EXPECT_NE(moved.err.find("moved.off"), std::string::npos) << moved.err;
+  EXPECT_NE(moved.err.find("--mesh"), std::string::npos) << moved.err;
+  EXPECT_FALSE(std::filesystem::exists(proxies_ / "report.html"));  // nothing half-written
+  EXPECT_EQ(testing::run_visproxy("report '" + proxies_.string() + "' --no-pictures --mesh '" + mesh_ + "'").exit_code, 0);
 }
 
 }  // namespace

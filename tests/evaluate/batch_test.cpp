@@ -115,7 +115,8 @@ TEST_F(Batch, AnAssetIsBuiltVerifiedMeasuredAndThenResumed) {
   EXPECT_EQ(record["claims_holding"], 2);
   EXPECT_EQ(record["triangles"], 12);
   const fs::path folder = out / record["folder"].get<std::string>();
-  for (const char* file : {"manifest.json", "report.html", "asset.json", "aabb.ply", "hull.ply"})
+  for (const char* file : {"manifest.json", "report.html", "recommendation.json", "pictures/aabb-overlay.png",
+                           "pictures/hull-difference.png", "asset.json", "aabb.ply", "hull.ply"})
     EXPECT_TRUE(fs::exists(folder / file)) << file;
   const json manifest = json::parse(read_file(folder / "manifest.json"));
   for (const json& entry : manifest["proxies"]) {
@@ -188,7 +189,16 @@ TEST_F(Batch, MergeSummarisesEveryRecordSortedWithFailuresListed) {
   for (const json& row : summary["rows"]) {
     EXPECT_TRUE(row["holds"].get<bool>());
     EXPECT_GT(row["f_hit"].get<double>(), 0.5);  // box and hull of a convex solid block what it blocks
+    // Each asset's report predicted every use of its proved outside proxies.
+    for (const char* use : {"efficiency_control_variate", "efficiency_eq8", "efficiency_bounds"})
+      EXPECT_GT(row[use].get<double>(), 0.0) << use;
   }
+  // A damaged recommendation.json leaves its asset's efficiencies out, nothing else.
+  const std::string first = summary["rows"][0]["folder"].get<std::string>();
+  write_file_atomically(out / first / "recommendation.json", "{\"proxies\": [");
+  const json damaged = batch_merge(out);
+  for (const json& row : damaged["rows"])
+    EXPECT_EQ(row["efficiency_bounds"].is_null(), row["folder"] == first) << row["proxy"];
   const std::string csv = read_file(out / "summary.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 4 + 1);
   EXPECT_NE(csv.find(",failed,"), std::string::npos);
@@ -197,7 +207,7 @@ TEST_F(Batch, MergeSummarisesEveryRecordSortedWithFailuresListed) {
   EXPECT_NE(html.find("broken.obj"), std::string::npos);
   EXPECT_NE(html.find("Failed assets"), std::string::npos);
   // Merging again gives the same summary.
-  EXPECT_EQ(batch_merge(out), summary);
+  EXPECT_EQ(batch_merge(out), damaged);
   // The files as their schemas describe them.
   const json summary_schema = testing::read_schema("batch-summary.schema.json");
   testing::expect_described(json::parse(read_file(out / "summary.json")), summary_schema, summary_schema, "summary.json");

@@ -208,6 +208,16 @@ def test_build_verify_and_measure_equal_the_cli_bit_for_bit(tmp_path, knot):
         recorded = theirs["manifest"]["measure"]
         for key in ("counts", "f_hit", "f_miss", "v_avg", "gssa_ratio", "probabilities", "variance", "rays"):
             assert mine[key] == recorded[key], (theirs["name"], key)
+    # The report written from Python is the CLI's, byte for byte, and its recommendation is returned.
+    cli("report", folder, "--picture-size", 48)
+    files = ["recommendation.json", "report.md", "report.html"] + [f"pictures/{p.name}" for p in (folder / "pictures").iterdir()]
+    assert len(files) == 3 + 1 + 3 * len(specs)
+    written = {name: (folder / name).read_bytes() for name in files}
+    recommendation = vp.report(folder, picture_size=48)
+    for name, content in written.items():
+        assert (folder / name).read_bytes() == content, name
+    assert recommendation == json.loads(written["recommendation.json"])
+    assert recommendation["uses"]["bounds"]["proxy"] in ("aabb", "hull-32", "outer-64", "inside-10")
 
 
 def write_scene(path, mesh_path):
