@@ -133,7 +133,7 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
       object["proxy"] = p.name;
       object["efficiency"] = number_or_null(p.uses[u].prediction.efficiency);
       object["interval"] = {number_or_null(p.uses[u].interval.lower), number_or_null(p.uses[u].interval.upper)};
-      object["beats_mesh"] = p.uses[u].prediction.efficiency >= 1;
+      object["beats_mesh"] = p.uses[u].prediction.efficiency > 1 && p.uses[u].interval.lower > 1;
     }
     uses[std::string(use_key(choice.use))] = object;
   }
