@@ -12,10 +12,11 @@
 // --scaling: the mesh subdivided 0, 1, 2, 3 times (bunny00: 75 K, 300 K, 1.2 M and 4.8 M
 // triangles) and each time displaced along its normals by seeded smooth bumps of a quarter
 // of an edge (displace.h), so that the finer meshes are finer surfaces, not flat
-// subdivisions. Each builder runs in its own process (fork) on each mesh: its wall time,
-// its peak resident memory (the input mesh, which it holds, included; getrusage of the
-// child), and the time over n log2 n (n input triangles), which stays flat for a builder
-// that scales as n log n. A builder that runs out of time or memory is named with what it
+// subdivisions. Each mesh is written to PREFIX-LEVEL.ply, and each builder runs on it in a
+// fresh process of this program (fork and exec) that reads the file and builds: its wall
+// time, its peak resident memory (reading the mesh and holding it included, as `visproxy
+// build` with that one proxy would; getrusage of the child), and the time over n log2 n
+// (n input triangles), which stays flat for a builder that scales as n log n. A builder that runs out of time or memory is named with what it
 // ran out of. Prints the table and the default set's sum of times and largest peak per
 // size, and writes PREFIX.csv and PREFIX.svg (seconds against triangles, log-log).
 
@@ -43,6 +44,7 @@
 #include "visproxy/mesh/displace.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/subdivide.h"
+#include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
 
 #ifndef VISPROXY_MESH_DIR
@@ -58,6 +60,7 @@ struct ChildReport {
   int ok = 0;
   std::size_t primitives = 0;
   double seconds = 0;
+  double read_mb = 0;  // resident after reading the mesh
   char message[400] = {};
 };
 
@@ -68,16 +71,49 @@ struct Run {
   std::size_t primitives = 0;
   double seconds = std::nan("");
   double peak_mb = std::nan("");
+  double read_mb = std::nan("");
   double ns_per_n_log_n() const {
     const double n = static_cast<double>(triangles);
     return seconds * 1e9 / (n * std::log2(n));
   }
 };
 
-Run run_builder(const TriangleMesh& mesh, const std::filesystem::path& path, const ProxySpec& spec, int time_limit,
+// This process's resident memory now (VmRSS), MiB.
+double resident_mb() {
+  std::FILE* status = std::fopen("/proc/self/status", "r");
+  if (!status) return std::nan("");
+  char line[256];
+  double kib = std::nan("");
+  while (std::fgets(line, sizeof line, status))
+    if (std::strncmp(line, "VmRSS:", 6) == 0) kib = std::atof(line + 6);
+  std::fclose(status);
+  return kib / 1024.0;
+}
+
+// The hidden --one mode: read FILE, build SPEC, write a ChildReport to descriptor 3.
+int build_one(const std::string& spec_text, const std::filesystem::path& file) {
+  ChildReport report;
+  try {
+    const TriangleMesh mesh = read_mesh(file, {.weld = Weld::never, .on_warning = {}});
+    report.read_mb = resident_mb();
+    const std::vector<ProxySpec> specs = parse_proxy_specs({spec_text});
+    BuildOptions options;
+    options.hausdorff_samples = 100;  // the error is not what is timed here
+    const BuiltProxy proxy = build_proxies(mesh, file, specs, options).front();
+    report.ok = 1, report.primitives = proxy.primitives, report.seconds = proxy.build_seconds;
+  } catch (const std::bad_alloc&) {
+    std::snprintf(report.message, sizeof report.message, "out of memory");
+  } catch (const std::exception& e) {
+    std::snprintf(report.message, sizeof report.message, "failed: %s", e.what());
+  }
+  [[maybe_unused]] const ssize_t written = ::write(3, &report, sizeof report);
+  return 0;
+}
+
+Run run_builder(const std::filesystem::path& file, std::size_t triangles, const ProxySpec& spec, int time_limit,
                 double memory_limit_gib) {
   Run run;
-  run.triangles = mesh.triangles.size();
+  run.triangles = triangles;
   run.proxy = spec.name();
   int pipe_ends[2];
   if (::pipe(pipe_ends) != 0) throw Error(std::string("pipe: ") + std::strerror(errno));
@@ -86,25 +122,17 @@ Run run_builder(const TriangleMesh& mesh, const std::filesystem::path& path, con
   if (child < 0) throw Error(std::string("fork: ") + std::strerror(errno));
   if (child == 0) {
     ::close(pipe_ends[0]);
+    if (pipe_ends[1] != 3) ::dup2(pipe_ends[1], 3), ::close(pipe_ends[1]);
     if (memory_limit_gib > 0) {
       const rlim_t bytes = static_cast<rlim_t>(memory_limit_gib * 1024 * 1024 * 1024);
       const rlimit limit{bytes, bytes};
       ::setrlimit(RLIMIT_AS, &limit);
     }
-    ::alarm(static_cast<unsigned>(time_limit));
-    ChildReport report;
-    try {
-      BuildOptions options;
-      options.hausdorff_samples = 100;  // the error is not what is timed here
-      const BuiltProxy proxy = build_proxies(mesh, path, {&spec, 1}, options).front();
-      report.ok = 1, report.primitives = proxy.primitives, report.seconds = proxy.build_seconds;
-    } catch (const std::bad_alloc&) {
-      std::snprintf(report.message, sizeof report.message, "out of memory");
-    } catch (const std::exception& e) {
-      std::snprintf(report.message, sizeof report.message, "failed: %s", e.what());
-    }
-    [[maybe_unused]] const ssize_t written = ::write(pipe_ends[1], &report, sizeof report);
-    ::_exit(0);
+    ::alarm(static_cast<unsigned>(time_limit));  // kept across exec
+    const std::string spec_text = spec.text, file_text = file.string();
+    const char* arguments[] = {"visproxy-bench-build", "--one", spec_text.c_str(), file_text.c_str(), nullptr};
+    ::execv("/proc/self/exe", const_cast<char* const*>(arguments));
+    ::_exit(127);
   }
   ::close(pipe_ends[1]);
   ChildReport report;
@@ -119,6 +147,7 @@ Run run_builder(const TriangleMesh& mesh, const std::filesystem::path& path, con
   rusage usage{};
   ::wait4(child, &status, 0, &usage);
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
+  if (got == sizeof report) run.read_mb = report.read_mb;
   if (got == sizeof report && report.ok) {
     run.primitives = report.primitives, run.seconds = report.seconds;
   } else if (got == sizeof report) {
@@ -141,11 +170,11 @@ std::vector<int> parse_levels(const std::string& text) {
 }
 
 std::string csv_text(const std::vector<Run>& runs) {
-  std::string csv = "input_triangles,proxy,status,primitives,seconds,peak_mb,ns_per_n_log2_n\n";
+  std::string csv = "input_triangles,proxy,status,primitives,seconds,peak_mb,mesh_read_mb,ns_per_n_log2_n\n";
   char line[512];
   for (const Run& r : runs) {
-    std::snprintf(line, sizeof line, "%zu,%s,\"%s\",%zu,%.4f,%.1f,%.3f\n", r.triangles, r.proxy.c_str(), r.status.c_str(),
-                  r.primitives, r.seconds, r.peak_mb, r.ns_per_n_log_n());
+    std::snprintf(line, sizeof line, "%zu,%s,\"%s\",%zu,%.4f,%.1f,%.1f,%.3f\n", r.triangles, r.proxy.c_str(),
+                  r.status.c_str(), r.primitives, r.seconds, r.peak_mb, r.read_mb, r.ns_per_n_log_n());
     csv += line;
   }
   return csv;
@@ -156,27 +185,32 @@ int scaling(const std::filesystem::path& path, const std::vector<int>& levels, c
   const TriangleMesh base = read_mesh(path);
   std::printf("Scaling of every builder on %s subdivided 0..N times and displaced by seeded bumps (a quarter of an edge, "
               "seed %llu). Each builder in its own process: wall time, peak resident memory (its input mesh included), "
-              "time / (n log2 n) for n input triangles. %ld cores.\n",
+              "resident memory once the mesh is read, time / (n log2 n) for n input triangles. %ld cores.\n",
               path.filename().c_str(), static_cast<unsigned long long>(seed), ::sysconf(_SC_NPROCESSORS_ONLN));
-  std::printf("%12s  %-16s %12s %10s %10s %14s  %s\n", "triangles", "proxy", "primitives", "seconds", "peak MB",
-              "ns/(n log2 n)", "status");
+  std::printf("%12s  %-16s %12s %10s %10s %10s %14s  %s\n", "triangles", "proxy", "primitives", "seconds", "peak MB",
+              "read MB", "ns/(n log2 n)", "status");
   std::vector<Run> runs;
   for (const int level : levels) {
-    TriangleMesh mesh = subdivide_midpoint(base, level);
-    mesh = displace_along_normals(mesh, {.amplitude_relative = 0.25, .seed = seed});
+    const std::filesystem::path file = prefix + "-" + std::to_string(level) + ".ply";
+    std::size_t triangles = 0;
+    {
+      const TriangleMesh mesh = displace_along_normals(subdivide_midpoint(base, level), {.amplitude_relative = 0.25, .seed = seed});
+      triangles = mesh.triangles.size();
+      write_mesh(file, mesh);
+    }
     double total = 0, peak = 0;
     bool complete = true;
     for (const ProxySpec& spec : specs) {
-      const Run run = run_builder(mesh, path, spec, time_limit, memory_limit_gib);
-      std::printf("%12zu  %-16s %12zu %10.3f %10.1f %14.3f  %s\n", run.triangles, run.proxy.c_str(), run.primitives,
-                  run.seconds, run.peak_mb, run.ns_per_n_log_n(), run.status.c_str());
+      const Run run = run_builder(file, triangles, spec, time_limit, memory_limit_gib);
+      std::printf("%12zu  %-16s %12zu %10.3f %10.1f %10.1f %14.3f  %s\n", run.triangles, run.proxy.c_str(), run.primitives,
+                  run.seconds, run.peak_mb, run.read_mb, run.ns_per_n_log_n(), run.status.c_str());
       std::fflush(stdout);
       if (run.status == "ok") total += run.seconds;
       complete = complete && run.status == "ok";
       peak = std::max(peak, run.peak_mb);
       runs.push_back(run);
     }
-    std::printf("%12zu  %-16s %12s %10.3f %10.1f %14s  %s\n", mesh.triangles.size(), "(the set)", "", total, peak, "",
+    std::printf("%12zu  %-16s %12s %10.3f %10.1f %10s %14s  %s\n", triangles, "(the set)", "", total, peak, "", "",
                 complete ? "sum of the times, largest peak" : "sum of the builders that finished, largest peak");
   }
   std::vector<PlotSeries> series;
@@ -196,7 +230,7 @@ int scaling(const std::filesystem::path& path, const std::vector<int>& levels, c
                                                .y_label = "wall time of the build, seconds (log scale)",
                                                .log_x = true,
                                                .log_y = true}));
-  std::printf("Wrote %s.csv and %s.svg\n", prefix.c_str(), prefix.c_str());
+  std::printf("Wrote %s.csv and %s.svg (the meshes: %s-LEVEL.ply)\n", prefix.c_str(), prefix.c_str(), prefix.c_str());
   return 0;
 }
 
@@ -213,7 +247,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> texts;
   for (int i = 1; i < argc; ++i) {
     const std::string argument = argv[i];
-    if (argument == "--subdivide" && i + 1 < argc) {
+    if (argument == "--one" && i + 2 < argc) {
+      return build_one(argv[i + 1], argv[i + 2]);
+    } else if (argument == "--subdivide" && i + 1 < argc) {
       levels = std::atoi(argv[++i]);
     } else if (argument == "--proxy" && i + 1 < argc) {
       texts.emplace_back(argv[++i]);
