@@ -2,15 +2,19 @@
 // (P. Cignoni, C. Rocchini, R. Scopigno. Metro: measuring error on simplified surfaces.
 // Computer Graphics Forum 17(2), 1998): points spread uniformly by area over one surface
 // (plus its vertices) are measured to their exact closest point on the other, found with
-// CGAL's AABB tree.
+// CGAL's AABB tree. The tree holds triangle indices only and reads the triangles from the
+// mesh (property maps shared by the tree), so that a mesh of millions of triangles is not
+// copied; the search tree that speeds up distance queries takes one point in 16 triangles.
 
 #include "visproxy/proxy/surface_distance.h"
 
+#include <CGAL/AABB_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Simple_cartesian.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -26,10 +30,35 @@ namespace {
 using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
 using CgalTriangle = Kernel::Triangle_3;
-using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 
 Point point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
+
+// Triangle `id` of the mesh, and its first corner as its reference point.
+struct TriangleOfMesh {
+  using key_type = std::uint32_t;
+  using value_type = CgalTriangle;
+  using reference = CgalTriangle;
+  using category = boost::readable_property_map_tag;
+  const TriangleMesh* mesh = nullptr;
+  friend CgalTriangle get(const TriangleOfMesh& map, std::uint32_t id) {
+    const Triangle& t = map.mesh->triangles[id];
+    return {point(map.mesh->positions[t[0]]), point(map.mesh->positions[t[1]]), point(map.mesh->positions[t[2]])};
+  }
+};
+struct CornerOfMesh {
+  using key_type = std::uint32_t;
+  using value_type = Point;
+  using reference = Point;
+  using category = boost::readable_property_map_tag;
+  const TriangleMesh* mesh = nullptr;
+  friend Point get(const CornerOfMesh& map, std::uint32_t id) {
+    return point(map.mesh->positions[map.mesh->triangles[id][0]]);
+  }
+};
+
+using Primitive = CGAL::AABB_primitive<std::uint32_t, TriangleOfMesh, CornerOfMesh, CGAL::Tag_true, CGAL::Tag_false>;
+using Traits = CGAL::AABB_traits<Kernel, Primitive>;
+using Tree = CGAL::AABB_tree<Traits>;
 
 bool exactly_collinear(const Vertex& a, const Vertex& b, const Vertex& c) {
   using ExactPoint = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
@@ -37,17 +66,72 @@ bool exactly_collinear(const Vertex& a, const Vertex& b, const Vertex& c) {
                          ExactPoint(c.x(), c.y(), c.z()));
 }
 
-// The parts of a mesh that are measured: its used vertices and its triangles of non-zero area.
-struct Surface {
-  std::vector<Point> vertices;
-  std::vector<CgalTriangle> triangles;
+// Uniform double in [0, 1) from the 53 high bits (std::mt19937_64's output is fixed by the
+// standard, unlike the standard distributions).
+double uniform(std::mt19937_64& random) { return static_cast<double>(random() >> 11) * 0x1.0p-53; }
+
+}  // namespace
+
+// The parts of a mesh that are measured: its used vertices and its triangles of non-zero
+// area (indices into the mesh), and the tree over those triangles.
+struct MeasuredSurface::Impl {
+  const TriangleMesh* mesh = nullptr;
+  std::vector<VertexIndex> vertices;
+  std::vector<std::uint32_t> triangles;
   std::vector<double> cumulative_area;  // running sum over `triangles`
+  Tree tree;
+
+  // Area-uniform points on the surface, in triangle order (so that consecutive queries are near).
+  std::vector<Point> sample(std::size_t count, std::mt19937_64& random) const {
+    const double total = cumulative_area.back();
+    std::vector<double> picks(count);
+    for (double& pick : picks) pick = uniform(random) * total;
+    std::sort(picks.begin(), picks.end());
+    std::vector<Point> samples;
+    samples.reserve(count);
+    std::size_t t = 0;
+    for (const double pick : picks) {
+      while (t + 1 < cumulative_area.size() && cumulative_area[t] <= pick) ++t;
+      const Triangle& triangle = mesh->triangles[triangles[t]];
+      const double s = std::sqrt(uniform(random));
+      const double r = uniform(random);
+      const double wa = 1 - s, wb = s * (1 - r), wc = s * r;
+      const Vertex& a = mesh->positions[triangle[0]];
+      const Vertex& b = mesh->positions[triangle[1]];
+      const Vertex& c = mesh->positions[triangle[2]];
+      samples.emplace_back(wa * a.x() + wb * b.x() + wc * c.x(), wa * a.y() + wb * b.y() + wc * c.y(),
+                           wa * a.z() + wb * b.z() + wc * c.z());
+    }
+    return samples;
+  }
+
+  // The largest distance from the points to the surface, in parallel (a maximum: the same
+  // whatever the split).
+  template <class Get>
+  double farthest(std::size_t count, const Get& get) const {
+    const double largest = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, count, 1024), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& range, double best) {
+          for (std::size_t i = range.begin(); i != range.end(); ++i) best = std::max(best, tree.squared_distance(get(i)));
+          return best;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    return std::sqrt(largest);
+  }
+  double farthest(const std::vector<Point>& points) const {
+    return farthest(points.size(), [&](std::size_t i) { return points[i]; });
+  }
+  double farthest_vertex(const Impl& from) const {
+    return farthest(from.vertices.size(), [&](std::size_t i) { return point(from.mesh->positions[from.vertices[i]]); });
+  }
 };
 
-Surface prepare(const TriangleMesh& mesh, const char* name) {
-  Surface surface;
+MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.mesh = &mesh;
   std::vector<std::uint8_t> used(mesh.positions.size(), 0);
-  for (const Triangle& triangle : mesh.triangles) {
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    const Triangle& triangle = mesh.triangles[i];
     for (const VertexIndex v : triangle) {
       if (v >= mesh.positions.size())
         throw InvalidInputError("", std::string("the ") + name + " mesh has a triangle corner out of range (" +
@@ -57,72 +141,56 @@ Surface prepare(const TriangleMesh& mesh, const char* name) {
         throw InvalidInputError("", std::string("the ") + name + " mesh has a non-finite vertex (" +
                                         std::to_string(v) + ")");
       used[v] = 1;
-      surface.vertices.push_back(point(mesh.positions[v]));
+      s.vertices.push_back(v);
     }
     const Vertex& a = mesh.positions[triangle[0]];
     const Vertex& b = mesh.positions[triangle[1]];
     const Vertex& c = mesh.positions[triangle[2]];
     if (exactly_collinear(a, b, c)) continue;
-    surface.triangles.emplace_back(point(a), point(b), point(c));
+    s.triangles.push_back(static_cast<std::uint32_t>(i));
     const double area = (b - a).cross(c - a).norm() / 2;
-    surface.cumulative_area.push_back((surface.cumulative_area.empty() ? 0.0 : surface.cumulative_area.back()) + area);
+    s.cumulative_area.push_back((s.cumulative_area.empty() ? 0.0 : s.cumulative_area.back()) + area);
   }
-  if (surface.triangles.empty())
+  if (s.triangles.empty())
     throw InvalidInputError("", std::string("the ") + name + " mesh has no triangle of non-zero area to measure");
-  return surface;
+  s.tree.rebuild(s.triangles.begin(), s.triangles.end(), TriangleOfMesh{&mesh}, CornerOfMesh{&mesh});
+  // The search tree that gives each distance query its first guess: a point of every 16th
+  // triangle (the corners of all of them would take as much memory as the tree).
+  std::vector<Traits::Point_and_primitive_id> hints;
+  hints.reserve(s.triangles.size() / 16 + 1);
+  for (std::size_t i = 0; i < s.triangles.size(); i += 16)
+    hints.emplace_back(get(CornerOfMesh{&mesh}, s.triangles[i]), s.triangles[i]);
+  s.tree.accelerate_distance_queries(hints.begin(), hints.end());
 }
 
-// Uniform double in [0, 1) from the 53 high bits (std::mt19937_64's output is fixed by the
-// standard, unlike the standard distributions).
-double uniform(std::mt19937_64& random) { return static_cast<double>(random() >> 11) * 0x1.0p-53; }
+MeasuredSurface::~MeasuredSurface() = default;
 
-// Area-uniform points on `surface`, in triangle order (so that consecutive queries are near).
-std::vector<Point> sample(const Surface& surface, std::size_t count, std::mt19937_64& random) {
-  const double total = surface.cumulative_area.back();
-  std::vector<double> picks(count);
-  for (double& pick : picks) pick = uniform(random) * total;
-  std::sort(picks.begin(), picks.end());
-  std::vector<Point> samples;
-  samples.reserve(count);
-  std::size_t t = 0;
-  for (const double pick : picks) {
-    while (t + 1 < surface.cumulative_area.size() && surface.cumulative_area[t] <= pick) ++t;
-    const CgalTriangle& triangle = surface.triangles[t];
-    const double s = std::sqrt(uniform(random));
-    const double r = uniform(random);
-    const double wa = 1 - s, wb = s * (1 - r), wc = s * r;
-    const Point& a = triangle[0];
-    const Point& b = triangle[1];
-    const Point& c = triangle[2];
-    samples.emplace_back(wa * a.x() + wb * b.x() + wc * c.x(), wa * a.y() + wb * b.y() + wc * c.y(),
-                         wa * a.z() + wb * b.z() + wc * c.z());
-  }
-  return samples;
-}
+namespace {
 
-double farthest(const std::vector<Point>& points, const Tree& tree) {
-  double largest = 0;
-  for (const Point& p : points) largest = std::max(largest, tree.squared_distance(p));
-  return std::sqrt(largest);
-}
-
-double one_sided(const Surface& from, const Surface& to, std::size_t samples, std::mt19937_64& random) {
-  Tree tree(to.triangles.begin(), to.triangles.end());
-  tree.accelerate_distance_queries();
-  return std::max(farthest(from.vertices, tree), farthest(sample(from, samples, random), tree));
+SurfaceDistance hausdorff(const MeasuredSurface::Impl& from_a, const MeasuredSurface::Impl& from_b,
+                          const SurfaceDistanceOptions& options) {
+  std::mt19937_64 random(options.seed);
+  SurfaceDistance distance;
+  distance.a_to_b_world =
+      std::max(from_b.farthest_vertex(from_a), from_b.farthest(from_a.sample(options.samples_per_mesh, random)));
+  distance.b_to_a_world =
+      std::max(from_a.farthest_vertex(from_b), from_a.farthest(from_b.sample(options.samples_per_mesh, random)));
+  return distance;
 }
 
 }  // namespace
 
+SurfaceDistance sampled_hausdorff_distance(const TriangleMesh& a, const MeasuredSurface& b,
+                                           const SurfaceDistanceOptions& options) {
+  const MeasuredSurface surface_a(a, "first");
+  return hausdorff(surface_a.impl(), b.impl(), options);
+}
+
 SurfaceDistance sampled_hausdorff_distance(const TriangleMesh& a, const TriangleMesh& b,
                                            const SurfaceDistanceOptions& options) {
-  const Surface surface_a = prepare(a, "first");
-  const Surface surface_b = prepare(b, "second");
-  std::mt19937_64 random(options.seed);
-  SurfaceDistance distance;
-  distance.a_to_b_world = one_sided(surface_a, surface_b, options.samples_per_mesh, random);
-  distance.b_to_a_world = one_sided(surface_b, surface_a, options.samples_per_mesh, random);
-  return distance;
+  const MeasuredSurface surface_a(a, "first");
+  const MeasuredSurface surface_b(b, "second");
+  return hausdorff(surface_a.impl(), surface_b.impl(), options);
 }
 
 }  // namespace visproxy
