@@ -24,6 +24,8 @@
 #include "visproxy/proxy/quadric_simplify.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -389,10 +391,11 @@ class QuadricSimplifier {
           for (const std::uint32_t w : triangles_[t])
             if (w > u && mark_[w] != stamp) {
               mark_[w] = stamp;
-              candidates_.push_back({error_bits(placement(u, w).error), u, w});
+              candidates_.push_back({0, u, w});
             }
         });
       }
+      rate_in_parallel(candidates_);
       sort_candidates(candidates_, scratch_);
       return;
     }
@@ -408,15 +411,25 @@ class QuadricSimplifier {
           // An edge between two survivors is rated from the lower one.
           if (w != u && mark_[w] != stamp && !(lock_[w] == pass_ && w < u)) {
             mark_[w] = stamp;
-            fresh_.push_back({error_bits(placement(u, w).error), u, w});
+            fresh_.push_back({0, u, w});
           }
       });
     }
+    rate_in_parallel(fresh_);
     sort_candidates(fresh_, scratch_);
     scratch_.resize(candidates_.size() + fresh_.size());
     std::merge(candidates_.begin(), candidates_.end(), fresh_.begin(), fresh_.end(), scratch_.begin(),
                [](const Candidate& a, const Candidate& b) { return a.error_bits < b.error_bits; });
     candidates_.swap(scratch_);
+  }
+
+  // Each listed edge's error (placement is const: the edges are rated independently, and
+  // the list keeps its order, so the result does not depend on the number of threads).
+  void rate_in_parallel(std::vector<Candidate>& edges) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i)
+        edges[i].error_bits = error_bits(placement(edges[i].u, edges[i].w).error);
+    });
   }
 
   // A fresh value for mark_, which no vertex holds yet.
