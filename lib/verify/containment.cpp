@@ -18,6 +18,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <variant>
 
@@ -73,6 +74,30 @@ bool meets(const CgalTriangle& proper, const Shape& shape) {
   return proper.has_on(std::get<Point>(shape));
 }
 
+// What segment pq does at one triangle it meets: nothing (a degenerate triangle, which
+// separates nothing), cross its interior leaving it from its inner side (+1) or entering
+// (-1), start on it (p on the triangle), or meet an edge, a vertex or the plane along the
+// way (degenerate: try another direction).
+enum class Crossing { none, leaving, entering, starts_on, degenerate };
+
+Crossing crossing_of(const CgalTriangle& t, const Point& p, const Point& q) {
+  if (t.is_degenerate()) return Crossing::none;  // zero area: never separates inside from outside
+  const CGAL::Orientation side = CGAL::orientation(t[0], t[1], t[2], p);
+  if (side == CGAL::COPLANAR) {
+    // p on the triangle's plane and pq meets the triangle: either p is on it, or the
+    // segment runs in the plane (degenerate direction).
+    return t.has_on(p) ? Crossing::starts_on : Crossing::degenerate;
+  }
+  if (CGAL::orientation(t[0], t[1], t[2], q) == CGAL::COPLANAR) return Crossing::degenerate;
+  const CGAL::Orientation e0 = CGAL::orientation(p, q, t[0], t[1]);
+  const CGAL::Orientation e1 = CGAL::orientation(p, q, t[1], t[2]);
+  const CGAL::Orientation e2 = CGAL::orientation(p, q, t[2], t[0]);
+  if (e0 == CGAL::COPLANAR || e1 == CGAL::COPLANAR || e2 == CGAL::COPLANAR) return Crossing::degenerate;
+  // The segment crosses the interior: leaving through a face seen from its inner side
+  // counts +1, entering through it -1.
+  return side == CGAL::NEGATIVE ? Crossing::leaving : Crossing::entering;
+}
+
 // Signed crossings of segment pq with the triangles; nullopt when pq meets an edge or a
 // vertex (try another direction); PointLocation::on_boundary via `on`.
 std::optional<int> winding_along(const Tree& tree, const Point& p, const Point& q, bool& on) {
@@ -80,26 +105,13 @@ std::optional<int> winding_along(const Tree& tree, const Point& p, const Point& 
   tree.all_intersected_primitives(CgalSegment(p, q), std::back_inserter(hits));
   int winding = 0;
   for (const auto& hit : hits) {
-    const CgalTriangle& t = *hit;
-    if (t.is_degenerate()) continue;  // zero area: never separates inside from outside
-    const CGAL::Orientation side = CGAL::orientation(t[0], t[1], t[2], p);
-    if (side == CGAL::COPLANAR) {
-      // p on the triangle's plane and pq meets the triangle: either p is on it, or the
-      // segment runs in the plane (degenerate direction).
-      if (t.has_on(p)) {
-        on = true;
-        return 0;
-      }
-      return std::nullopt;
+    switch (crossing_of(*hit, p, q)) {
+      case Crossing::none: break;
+      case Crossing::starts_on: on = true; return 0;
+      case Crossing::degenerate: return std::nullopt;
+      case Crossing::leaving: ++winding; break;
+      case Crossing::entering: --winding; break;
     }
-    if (CGAL::orientation(t[0], t[1], t[2], q) == CGAL::COPLANAR) return std::nullopt;
-    const CGAL::Orientation e0 = CGAL::orientation(p, q, t[0], t[1]);
-    const CGAL::Orientation e1 = CGAL::orientation(p, q, t[1], t[2]);
-    const CGAL::Orientation e2 = CGAL::orientation(p, q, t[2], t[0]);
-    if (e0 == CGAL::COPLANAR || e1 == CGAL::COPLANAR || e2 == CGAL::COPLANAR) return std::nullopt;
-    // The segment crosses the interior: leaving through a face seen from its inner side
-    // counts +1, entering through it -1.
-    winding += side == CGAL::NEGATIVE ? 1 : -1;
   }
   return winding;
 }
@@ -289,36 +301,118 @@ std::vector<PointLocation> locate_points(const TriangleMesh& container, std::spa
   for (std::size_t i = 0; i < points.size(); ++i)
     if (!(points[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
       throw InvalidInputError("", "point " + std::to_string(i) + " to locate is not finite or beyond 1e100 in magnitude");
+  const BoundingBox box = bounding_box(container);
+  const double reach = 4.0 * box.diagonal() + 1.0;
+  // The segment from each point in the box, along a fixed generic direction, to a point
+  // beyond the box; retries (below) draw seeded directions.
+  const Vertex direction = Vertex(0.5773502691896258, 0.4472135954999579, 0.6831300510639732).normalized();
+  auto segment_end = [&](const Vertex& v, const Vertex& d) { return v + (reach + (v - box.min).norm() + (v - box.max).norm()) * d; };
+  std::vector<std::uint32_t> active;  // points in the box (the rest are outside)
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!((points[i].array() < box.min.array()).any() || (points[i].array() > box.max.array()).any()))
+      active.push_back(static_cast<std::uint32_t>(i));
+  if (active.empty()) return locations;
+
+  // One pass over the triangles instead of a tree: the points binned on a grid in the plane
+  // across the direction, each triangle tested exactly against the segments of the points in
+  // the cells its shadow on that plane covers. Bins and shadows are computed in double and
+  // padded far beyond their rounding, so no segment that meets a triangle is missed.
+  const Vertex across_u = direction.cross(std::abs(direction.x()) < 0.9 ? Vertex(1, 0, 0) : Vertex(0, 1, 0)).normalized();
+  const Vertex across_v = direction.cross(across_u);
+  const double magnitude = std::max({box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff(), 1e-300});
+  const double pad = 1e-9 * (magnitude + 3 * reach);
+  std::vector<Point> starts(active.size()), ends(active.size());
+  std::vector<double> u(active.size()), v(active.size()), along(active.size());
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min, v_min = u_min, v_max = -u_min;
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    const Vertex& p = points[active[k]];
+    starts[k] = to_point(p);
+    ends[k] = to_point(segment_end(p, direction));
+    u[k] = p.dot(across_u), v[k] = p.dot(across_v), along[k] = p.dot(direction);
+    u_min = std::min(u_min, u[k]), u_max = std::max(u_max, u[k]), v_min = std::min(v_min, v[k]), v_max = std::max(v_max, v[k]);
+  }
+  const std::size_t side = std::clamp<std::size_t>(static_cast<std::size_t>(std::sqrt(active.size() / 2.0)), 1, 2048);
+  const double cell_u = std::max((u_max - u_min) / static_cast<double>(side), 1e-300);
+  const double cell_v = std::max((v_max - v_min) / static_cast<double>(side), 1e-300);
+  auto cell_of = [&](double value, double low, double cell) {
+    return static_cast<std::size_t>(std::clamp((value - low) / cell, 0.0, static_cast<double>(side - 1)));
+  };
+  std::vector<std::uint32_t> cell_start(side * side + 1, 0), in_cell(active.size());
+  for (std::size_t k = 0; k < active.size(); ++k) ++cell_start[cell_of(u[k], u_min, cell_u) * side + cell_of(v[k], v_min, cell_v) + 1];
+  for (std::size_t c = 0; c < side * side; ++c) cell_start[c + 1] += cell_start[c];
+  {
+    std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
+    for (std::size_t k = 0; k < active.size(); ++k)
+      in_cell[fill[cell_of(u[k], u_min, cell_u) * side + cell_of(v[k], v_min, cell_v)]++] = static_cast<std::uint32_t>(k);
+  }
+  const std::unique_ptr<std::atomic<int>[]> winding(new std::atomic<int>[active.size()]);
+  const std::unique_ptr<std::atomic<std::uint8_t>[]> state(new std::atomic<std::uint8_t>[active.size()]);  // 1 on, 2 degenerate
+  for (std::size_t k = 0; k < active.size(); ++k) winding[k] = 0, state[k] = 0;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, container.triangles.size(), 1024), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t t = range.begin(); t != range.end(); ++t) {
+      const Triangle& corners = container.triangles[t];
+      double tu_lo = std::numeric_limits<double>::infinity(), tu_hi = -tu_lo, tv_lo = tu_lo, tv_hi = -tu_lo, ta_hi = -tu_lo;
+      for (const VertexIndex c : corners) {
+        const Vertex& x = container.positions[c];
+        const double xu = x.dot(across_u), xv = x.dot(across_v), xa = x.dot(direction);
+        tu_lo = std::min(tu_lo, xu), tu_hi = std::max(tu_hi, xu), tv_lo = std::min(tv_lo, xv), tv_hi = std::max(tv_hi, xv);
+        ta_hi = std::max(ta_hi, xa);
+      }
+      tu_lo -= pad, tu_hi += pad, tv_lo -= pad, tv_hi += pad, ta_hi += pad;
+      if (tu_hi < u_min || tu_lo > u_max || tv_hi < v_min || tv_lo > v_max) continue;
+      std::optional<CgalTriangle> triangle;
+      const std::size_t cu_lo = cell_of(tu_lo, u_min, cell_u), cu_hi = cell_of(tu_hi, u_min, cell_u);
+      const std::size_t cv_lo = cell_of(tv_lo, v_min, cell_v), cv_hi = cell_of(tv_hi, v_min, cell_v);
+      for (std::size_t cu = cu_lo; cu <= cu_hi; ++cu)
+        for (std::size_t cv = cv_lo; cv <= cv_hi; ++cv)
+          for (std::uint32_t at = cell_start[cu * side + cv]; at < cell_start[cu * side + cv + 1]; ++at) {
+            const std::uint32_t k = in_cell[at];
+            if (u[k] < tu_lo || u[k] > tu_hi || v[k] < tv_lo || v[k] > tv_hi || ta_hi < along[k]) continue;
+            if (!triangle)
+              triangle.emplace(to_point(container.positions[corners[0]]), to_point(container.positions[corners[1]]),
+                               to_point(container.positions[corners[2]]));
+            if (!CGAL::do_intersect(CgalSegment(starts[k], ends[k]), *triangle)) continue;
+            switch (crossing_of(*triangle, starts[k], ends[k])) {
+              case Crossing::none: break;
+              case Crossing::starts_on: state[k].fetch_or(1); break;
+              case Crossing::degenerate: state[k].fetch_or(2); break;
+              case Crossing::leaving: winding[k].fetch_add(1); break;
+              case Crossing::entering: winding[k].fetch_sub(1); break;
+            }
+          }
+    }
+  });
+
+  // Points whose segment met an edge, a vertex or a plane along the way: seeded directions
+  // until one is in general position, through a tree (few points).
+  std::vector<std::size_t> retry;
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    if (state[k] & 1) locations[active[k]] = PointLocation::on_boundary;
+    else if (state[k] & 2) retry.push_back(k);
+    else locations[active[k]] = winding[k] != 0 ? PointLocation::inside : PointLocation::outside;
+  }
+  if (retry.empty()) return locations;
   const Triangles triangles = triangles_of(container);
   Tree tree(triangles.begin(), triangles.end());
   tree.build();
-  const BoundingBox box = bounding_box(container);
-  const double reach = 4.0 * box.diagonal() + 1.0;
-
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const tbb::blocked_range<std::size_t>& range) {
-    for (std::size_t i = range.begin(); i != range.end(); ++i) {
-      const Vertex& v = points[i];
-      if ((v.array() < box.min.array()).any() || (v.array() > box.max.array()).any()) continue;  // outside the box
-      const Point p = to_point(v);
-      // The first direction is fixed and generic; retries draw seeded directions.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, retry.size(), 16), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t r = range.begin(); r != range.end(); ++r) {
+      const std::size_t i = active[retry[r]];
+      const Vertex& point = points[i];
       Random random(0x5EED0000u + i);
-      Vertex direction = Vertex(0.5773502691896258, 0.4472135954999579, 0.6831300510639732).normalized();
-      for (int attempt = 0;; ++attempt) {
-        // A point outside the box in this direction: the segment pq leaves the container.
-        const double distance = reach + (v - box.min).norm() + (v - box.max).norm();
-        const Point q = to_point(v + distance * direction);
+      for (int attempt = 1;; ++attempt) {
+        const Vertex d = random.unit_vector();
         bool on = false;
-        const std::optional<int> winding = winding_along(tree, p, q, on);
+        const std::optional<int> count = winding_along(tree, to_point(point), to_point(segment_end(point, d)), on);
         if (on) {
           locations[i] = PointLocation::on_boundary;
           break;
         }
-        if (winding) {
-          locations[i] = *winding != 0 ? PointLocation::inside : PointLocation::outside;
+        if (count) {
+          locations[i] = *count != 0 ? PointLocation::inside : PointLocation::outside;
           break;
         }
         if (attempt == 1000) throw Error("point location: no ray in general position after 1000 tries");
-        direction = random.unit_vector();
       }
     }
   });

@@ -29,7 +29,10 @@ enum class PointLocation : std::uint8_t { inside, on_boundary, outside };
 /// contains the union of their volumes. Points on a triangle are `on_boundary`.
 /// The winding number is counted along a ray with exact orientation predicates; rays
 /// that meet an edge or a vertex are replaced by another seeded direction. Degenerate
-/// (zero-area) triangles do not separate anything and are ignored.
+/// (zero-area) triangles do not separate anything and are ignored. The first rays share one
+/// direction and are met with the triangles in one parallel pass (the points binned across
+/// that direction): linear in the triangles, with no tree to build; the answer does not
+/// depend on the number of threads.
 /// Precondition: `container` is closed (EdgeBalance); for an open container the answer
 /// depends on the ray. Throws InvalidInputError (empty file name) for coordinates beyond
 /// kMaxCoordinate.

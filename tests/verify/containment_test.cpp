@@ -4,6 +4,7 @@
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
@@ -98,6 +99,67 @@ TEST(LocatePoints, AgreesWithCgalSideOfTriangleMeshOnBunny) {
     inside += locations[i] == PointLocation::inside;
   }
   EXPECT_GT(inside, 500u);  // the sample is not trivially all outside
+}
+
+// The exact answer from CGAL for each point.
+std::vector<PointLocation> cgal_locations(const TriangleMesh& mesh, const std::vector<Vertex>& points) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
+  SurfaceMesh surface;
+  std::vector<SurfaceMesh::Vertex_index> vertices;
+  for (const Vertex& p : mesh.positions) vertices.push_back(surface.add_vertex({p.x(), p.y(), p.z()}));
+  for (const Triangle& t : mesh.triangles) surface.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
+  const CGAL::Side_of_triangle_mesh<SurfaceMesh, Kernel> side(surface);
+  std::vector<PointLocation> out;
+  for (const Vertex& p : points) {
+    const CGAL::Bounded_side s = side(Kernel::Point_3(p.x(), p.y(), p.z()));
+    out.push_back(s == CGAL::ON_BOUNDED_SIDE ? PointLocation::inside
+                  : s == CGAL::ON_BOUNDARY   ? PointLocation::on_boundary
+                                             : PointLocation::outside);
+  }
+  return out;
+}
+
+// Points a hair's breadth either side of the surface, on it (its vertices), and anywhere in
+// the box, on a mesh far from the origin: the binned pass must miss no crossing however
+// fine its grid, and give the same answers on one thread as on many.
+TEST(LocatePoints, AgreesWithCgalAtTheSurfaceFarFromTheOriginOnAnyNumberOfThreads) {
+  const TriangleMesh bunny = transformed(read_mesh(testing::cgal_mesh("bunny00.off")), 1, {3e5, -2e5, 1e5});
+  const BoundingBox box = bounding_box(bunny);
+  const double d = box.diagonal();
+  Random random(7);
+  std::vector<Vertex> points;
+  for (int i = 0; i < 20000; ++i)
+    points.push_back(box.min + Vertex(random.uniform(), random.uniform(), random.uniform()).cwiseProduct(box.max - box.min));
+  for (std::size_t t = 0; t < bunny.triangles.size(); t += 7) {
+    const Triangle& tri = bunny.triangles[t];
+    const Vertex& a = bunny.positions[tri[0]];
+    const Vertex normal = (bunny.positions[tri[1]] - a).cross(bunny.positions[tri[2]] - a).normalized();
+    const Vertex centre = (a + bunny.positions[tri[1]] + bunny.positions[tri[2]]) / 3;
+    points.push_back(a);                          // on the surface
+    points.push_back(centre + 1e-9 * d * normal);  // just outside
+    points.push_back(centre - 1e-9 * d * normal);  // just inside
+  }
+  const std::vector<PointLocation> expected = cgal_locations(bunny, points);
+  std::vector<PointLocation> one_thread;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one_thread = locate_points(bunny, points);
+  }
+  const std::vector<PointLocation> many = locate_points(bunny, points);
+  EXPECT_EQ(one_thread, many);
+  std::size_t wrong = 0, inside = 0, on = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    wrong += many[i] != expected[i];
+    inside += many[i] == PointLocation::inside;
+    on += many[i] == PointLocation::on_boundary;
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(inside, 5000u);
+  EXPECT_GT(on, 3000u);
+  // One point alone (a grid of one cell).
+  for (const std::size_t i : {std::size_t{0}, std::size_t{20000}, std::size_t{20001}, std::size_t{20002}})
+    EXPECT_EQ(locate_points(bunny, std::vector<Vertex>{points[i]}).front(), expected[i]) << i;
 }
 
 TEST(CheckContainment, ScaledCopyInsideAndCrossingCopy) {
