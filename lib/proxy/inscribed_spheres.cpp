@@ -334,10 +334,8 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
     result.min_margin_world = check.min_margin_world;
     if (check.contained()) break;
     if (round == 60) throw Error("inside spheres: a sphere still fails the exact containment check after shrinking");
-    // Only failing spheres shrink; find them one by one from the first failure.
-    for (std::size_t i = *check.first_outside; i < chosen.size(); ++i) {
-      const Sphere single[1] = {chosen[i]};
-      if (check_spheres_inside(mesh, single).contained()) continue;
+    // Only failing spheres shrink.
+    for (const std::size_t i : check.outside) {
       chosen[i].radius *= 1.0 - std::ldexp(1.0, -52 + shrink_steps[i]);
       ++shrink_steps[i];
     }

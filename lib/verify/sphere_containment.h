@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/mesh/triangle_mesh.h"
@@ -14,6 +15,7 @@ struct SphereContainment {
   std::size_t spheres_checked = 0;
   std::size_t spheres_outside = 0;            ///< spheres that fail (centre not inside, or radius too large)
   std::optional<std::size_t> first_outside;   ///< index of the first sphere that fails
+  std::vector<std::size_t> outside;           ///< indices of every sphere that fails, increasing
   /// Min over the spheres of (signed distance from the centre to the surface - radius),
   /// in mesh units, computed in doubles (rounded; informative only, the verdict is exact).
   /// The distance is negative when the centre is not strictly inside. 0 for no spheres.
@@ -27,10 +29,11 @@ struct SphereContainment {
 /// sides exact (the radius as the double it is; no tolerance). The ball can then touch the
 /// surface but not cross it. A negative or non-finite radius, or a non-finite centre, fails.
 ///
-/// Triangles near each ball are found with CGAL's AABB tree by the ball's bounding box
-/// (so that triangles lying wholly inside the ball are found too); only those are compared
-/// exactly (CGAL's lazy exact kernel), so the cost is O(#F log #F) to build plus O(log #F)
-/// per sphere that does not touch the surface. Degenerate (zero-area) triangles bound
+/// Triangles near each ball are those whose box meets the ball's bounding box (so that
+/// triangles lying wholly inside the ball are found too), found in one parallel pass over
+/// the triangles with the balls on a grid; only those are compared exactly (CGAL's lazy
+/// exact kernel). The cost is linear in the triangles, with no tree to build, and the
+/// verdicts do not depend on the number of threads. Degenerate (zero-area) triangles bound
 /// nothing and are not compared.
 ///
 /// Precondition checked: the mesh has triangles and is closed (EdgeBalance: every edge
