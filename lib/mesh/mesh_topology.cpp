@@ -49,7 +49,51 @@ void require_topology_size(std::size_t triangles) {
 
 EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
   require_topology_size(mesh.triangles.size());
-  // (low << 33 | high << 1 | backward): equal edges sort together, forward uses first.
+  EdgeBalance balance;
+  // Each use of an edge (low, high) as (high << 1 | backward), grouped by its low vertex
+  // (a counting sort), then sorted within the group: the edges come in (low, high) order,
+  // in linear time but for the small sorts. Indices beyond the vertices (a malformed mesh)
+  // are grouped by one sort of whole keys instead.
+  VertexIndex largest = 0;
+  for (const Triangle& t : mesh.triangles) largest = std::max({largest, t[0], t[1], t[2]});
+  auto tally = [&](VertexIndex low, const std::uint64_t* begin, const std::uint64_t* end) {
+    for (const std::uint64_t* at = begin; at != end;) {
+      const std::uint64_t* next = at;
+      std::size_t backward = 0;
+      for (; next != end && (*next >> 1) == (*at >> 1); ++next) backward += *next & 1u;
+      const std::size_t forward = static_cast<std::size_t>(next - at) - backward;
+      if (forward != backward && balance.unbalanced_edges++ == 0) {
+        balance.first_low = low;
+        balance.first_high = static_cast<VertexIndex>(*at >> 1);
+        balance.first_forward = forward;
+        balance.first_backward = backward;
+      }
+      at = next;
+    }
+  };
+  if (!mesh.triangles.empty() && largest < mesh.positions.size()) {
+    std::vector<std::uint32_t> start(static_cast<std::size_t>(largest) + 2, 0);
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k)
+        if (t[k] != t[(k + 1) % 3]) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
+    for (std::size_t v = 0; v + 1 < start.size(); ++v) start[v + 1] += start[v];
+    std::vector<std::uint64_t> uses(start.back());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (const Triangle& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const VertexIndex a = t[k], b = t[(k + 1) % 3];
+        if (a == b) continue;
+        uses[fill[std::min(a, b)]++] = (static_cast<std::uint64_t>(std::max(a, b)) << 1) | (a > b ? 1u : 0u);
+      }
+    for (std::size_t v = 0; v + 1 < start.size(); ++v) {
+      std::uint64_t* begin = uses.data() + start[v];
+      std::uint64_t* end = uses.data() + start[v + 1];
+      std::sort(begin, end);
+      tally(static_cast<VertexIndex>(v), begin, end);
+    }
+    return balance;
+  }
+  // (low << 33 | high << 1 | backward): equal edges sort together.
   std::vector<std::uint64_t> uses;
   uses.reserve(3 * mesh.triangles.size());
   for (const Triangle& t : mesh.triangles)
@@ -59,17 +103,13 @@ EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
       uses.push_back((std::min(a, b) << 33) | (std::max(a, b) << 1) | (a > b ? 1u : 0u));
     }
   std::sort(uses.begin(), uses.end());
-  EdgeBalance balance;
   for (std::size_t begin = 0; begin < uses.size();) {
-    std::size_t end = begin, backward = 0;
-    for (; end < uses.size() && (uses[end] >> 1) == (uses[begin] >> 1); ++end) backward += uses[end] & 1u;
-    const std::size_t forward = end - begin - backward;
-    if (forward != backward && balance.unbalanced_edges++ == 0) {
-      balance.first_low = static_cast<VertexIndex>(uses[begin] >> 33);
-      balance.first_high = static_cast<VertexIndex>((uses[begin] >> 1) & 0xFFFFFFFFu);
-      balance.first_forward = forward;
-      balance.first_backward = backward;
-    }
+    std::size_t end = begin;
+    const std::uint64_t low = uses[begin] >> 33;
+    while (end < uses.size() && (uses[end] >> 33) == low) ++end;
+    std::vector<std::uint64_t> group;
+    for (std::size_t i = begin; i < end; ++i) group.push_back(uses[i] & 0x1FFFFFFFFull);
+    tally(static_cast<VertexIndex>(low), group.data(), group.data() + group.size());
     begin = end;
   }
   return balance;

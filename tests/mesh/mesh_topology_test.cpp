@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <map>
+#include <optional>
+
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
@@ -61,6 +65,57 @@ TEST(EdgeBalance, ClosedMeshesAreBalancedOpenOrFlippedOnesAreNot) {
   TriangleMesh repeated = testing::unit_cube();
   repeated.triangles.push_back({0, 0, 7});
   EXPECT_TRUE(check_edge_balance(repeated).balanced());
+}
+
+// The grouped count against a plain count of every directed edge, on meshes torn at random
+// (triangles dropped, flipped, repeated), and with an index beyond the vertices.
+TEST(EdgeBalance, AgreesWithAPlainCountOnTornMeshes) {
+  TriangleMesh sphere = testing::unit_cube();
+  for (int level = 0; level < 3; ++level) {  // 768 triangles, by splitting each into 4
+    TriangleMesh finer;
+    finer.positions = sphere.positions;
+    for (const Triangle& t : sphere.triangles) {
+      VertexIndex m[3];
+      for (int k = 0; k < 3; ++k) {
+        m[k] = static_cast<VertexIndex>(finer.positions.size());
+        finer.positions.push_back((sphere.positions[t[k]] + sphere.positions[t[(k + 1) % 3]]) / 2);
+      }
+      finer.triangles.insert(finer.triangles.end(), {{t[0], m[0], m[2]}, {m[0], t[1], m[1]}, {m[2], m[1], t[2]}, {m[0], m[1], m[2]}});
+    }
+    sphere = weld_vertices(finer);
+  }
+  std::uint64_t state = 12345;
+  auto next = [&](std::uint64_t n) { state = state * 6364136223846793005ull + 1442695040888963407ull; return (state >> 33) % n; };
+  for (int round = 0; round < 30; ++round) {
+    TriangleMesh torn = sphere;
+    for (int k = 0; k < round; ++k) {
+      const std::size_t t = next(torn.triangles.size());
+      switch (next(3)) {
+        case 0: torn.triangles.erase(torn.triangles.begin() + static_cast<std::ptrdiff_t>(t)); break;
+        case 1: std::swap(torn.triangles[t][0], torn.triangles[t][1]); break;
+        default: torn.triangles.push_back(torn.triangles[t]); break;
+      }
+    }
+    if (round == 29) torn.triangles.push_back({0, 1, static_cast<VertexIndex>(torn.positions.size() + 5)});
+    std::map<std::pair<VertexIndex, VertexIndex>, std::array<std::size_t, 2>> uses;
+    for (const Triangle& t : torn.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const VertexIndex a = t[k], b = t[(k + 1) % 3];
+        if (a != b) ++uses[{std::min(a, b), std::max(a, b)}][a > b ? 1 : 0];
+      }
+    std::size_t unbalanced = 0;
+    std::optional<std::pair<VertexIndex, VertexIndex>> first;
+    for (const auto& [edge, count] : uses)
+      if (count[0] != count[1] && unbalanced++ == 0) first = edge;
+    const EdgeBalance balance = check_edge_balance(torn);
+    EXPECT_EQ(balance.unbalanced_edges, unbalanced) << round;
+    if (first) {
+      EXPECT_EQ(balance.first_low, first->first) << round;
+      EXPECT_EQ(balance.first_high, first->second) << round;
+      EXPECT_EQ(balance.first_forward, (uses[*first][0])) << round;
+      EXPECT_EQ(balance.first_backward, (uses[*first][1])) << round;
+    }
+  }
 }
 
 TEST(MeshTopology, MoreTrianglesThanCornerIndicesHoldAreRefused) {
