@@ -8,13 +8,17 @@
 #include <CGAL/optimal_bounding_box.h>
 
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/convex_hull.h"
 #include "visproxy/verify/containment.h"
 
 namespace visproxy {
@@ -159,6 +163,49 @@ TriangleMesh axis_aligned_box_mesh(const TriangleMesh& mesh) {
   return box_mesh(corners);
 }
 
+namespace {
+
+// Whether every point is inside or on the closed mesh, exactly. A mesh whose every vertex
+// lies on or behind the plane of every triangle, some strictly, is convex, the
+// intersection of those half-spaces: a point is then held when it lies on or behind every plane (a few exact
+// orientations, in parallel). Otherwise, by winding numbers (locate_points).
+bool holds_every_point(const TriangleMesh& box, const std::vector<Vertex>& points) {
+  std::vector<std::array<Point, 3>> planes;
+  for (const Triangle& t : box.triangles)
+    planes.push_back({to_point(box.positions[t[0]]), to_point(box.positions[t[1]]), to_point(box.positions[t[2]])});
+  // (With some vertex strictly behind every plane: a flat box has no inside, and a point
+  // in its plane is not held for being on no plane's front.)
+  const bool convex = std::all_of(planes.begin(), planes.end(), [&](const std::array<Point, 3>& plane) {
+    bool behind = false;
+    for (const Vertex& v : box.positions) {
+      const CGAL::Orientation side = CGAL::orientation(plane[0], plane[1], plane[2], to_point(v));
+      if (side == CGAL::POSITIVE) return false;
+      behind = behind || side == CGAL::NEGATIVE;
+    }
+    return behind;
+  });
+  if (!convex) {
+    const std::vector<PointLocation> locations = locate_points(box, points);
+    return std::none_of(locations.begin(), locations.end(), [](PointLocation l) { return l == PointLocation::outside; });
+  }
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), 4096), true,
+      [&](const tbb::blocked_range<std::size_t>& range, bool held) {
+        for (std::size_t i = range.begin(); held && i != range.end(); ++i) {
+          const Point p = to_point(points[i]);
+          for (const std::array<Point, 3>& plane : planes)
+            if (CGAL::orientation(plane[0], plane[1], plane[2], p) == CGAL::POSITIVE) {
+              held = false;
+              break;
+            }
+        }
+        return held;
+      },
+      [](bool a, bool b) { return a && b; });
+}
+
+}  // namespace
+
 OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBoxOptions& options) {
   const std::vector<Vertex> points = used_positions(mesh);
   if (points.empty()) throw InvalidInputError("", "the mesh has no triangles: a box needs at least one");
@@ -174,16 +221,22 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
     const char* name;
   };
   std::vector<Candidate> candidates = {{Eigen::Matrix3d::Identity(), "axis-aligned"}};
+  std::vector<Vertex> corners = points;  // the points the boxes are fitted to
   if (flat) {
     const Vertex e0 = (points[(*spanning)[1]] - points[(*spanning)[0]]).normalized();
     const Vertex normal = e0.cross(points[(*spanning)[2]] - points[(*spanning)[0]]).normalized();
     candidates.push_back({best_plane_axes(points, e0, normal.cross(e0)), "plane"});
   } else {
+    // The box's extent in any direction is reached at a corner of the convex hull: CGAL's
+    // optimisation and the fits below need the hull's corners only (computed exactly, in
+    // parallel for large meshes); the proof below still takes every vertex.
+    corners = build_convex_hull(mesh).mesh.positions;
     std::vector<Point> cgal_points;
-    cgal_points.reserve(points.size());
-    for (const Vertex& p : points) cgal_points.push_back(to_point(p));
+    cgal_points.reserve(corners.size());
+    for (const Vertex& p : corners) cgal_points.push_back(to_point(p));
     Kernel::Aff_transformation_3 rotation;
-    CGAL::oriented_bounding_box(cgal_points, rotation, CGAL::parameters::random_seed(options.seed));
+    CGAL::oriented_bounding_box(cgal_points, rotation,
+                                CGAL::parameters::random_seed(options.seed).use_convex_hull(false));
     Eigen::Matrix3d axes;  // the rotation's rows are the box axes
     for (int row = 0; row < 3; ++row)
       for (int column = 0; column < 3; ++column) axes(column, row) = CGAL::to_double(rotation.m(row, column));
@@ -201,7 +254,7 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
   OrientedBoxResult result;
   double best = std::numeric_limits<double>::infinity();
   for (const Candidate& candidate : candidates) {
-    const OrientedBox box = fit_box(points, candidate.axes);
+    const OrientedBox box = fit_box(corners, candidate.axes);
     if (box_size(box, flat) < best) {
       best = box_size(box, flat);
       result.box = box;
@@ -216,9 +269,7 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
   for (int attempt = 0;; ++attempt) {
     result.box.half_extents = fitted.half_extents.array() + result.inflation_world;
     result.mesh = box_mesh(result.box.corners());
-    const std::vector<PointLocation> locations = locate_points(result.mesh, points);
-    if (std::none_of(locations.begin(), locations.end(), [](PointLocation l) { return l == PointLocation::outside; }))
-      break;
+    if (holds_every_point(result.mesh, points)) break;
     if (attempt == 60) throw Error("oriented bounding box: cannot prove containment (non-finite coordinates?)");
     result.inflation_world = result.inflation_world == 0 ? 1e-15 * diagonal : 2 * result.inflation_world;
   }

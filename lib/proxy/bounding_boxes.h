@@ -37,8 +37,9 @@ struct OrientedBoxResult {
   const char* axes_from;    ///< which candidate won: "cgal", "principal axes", "axis-aligned", "plane"
 };
 
-/// The smallest-volume box among CGAL's optimal bounding box, the principal-axes box and
-/// the axis-aligned box (for a flat input: the smallest-area rectangle in its plane).
+/// The smallest-volume box among CGAL's optimal bounding box (run on the corners of the
+/// exact convex hull), the principal-axes box and the axis-aligned box (for a flat input:
+/// the smallest-area rectangle in its plane), each fitted to the hull's corners.
 /// Every vertex is proved inside or on the resulting mesh with exact predicates; when
 /// rounding of the corners would leave one outside, the box grows by a few ulps of the
 /// diagonal until none is. Same errors as axis_aligned_box_mesh.

@@ -2,7 +2,10 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Extreme_points_traits_adapter_3.h>
 #include <CGAL/convex_hull_3.h>
+#include <CGAL/property_map.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cassert>
@@ -27,6 +30,15 @@ std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t i) {
   return i;
 }
 
+// Looked up only, never iterated: the hash order does not reach the output.
+struct CoordinatesHash {
+  std::size_t operator()(const std::array<double, 3>& c) const {
+    std::size_t h = 0;
+    for (const double x : c) h = h * 0x9E3779B97F4A7C15ull + std::hash<double>{}(x);
+    return h;
+  }
+};
+
 }  // namespace
 
 std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
@@ -35,22 +47,45 @@ std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
   for (const Vertex& p : points) cgal_points.push_back(point(p));
   // The Surface_mesh overload picks CGAL's exact-predicate hull traits (the indexed
   // triangle set overload of CGAL 5.5 falls back to the kernel's rounded planes).
+  // Many points: the hull's corners of each of a few slices of them, in parallel, then the
+  // hull of those corners alone, which is the hull of all (every corner of the whole is a
+  // corner of its slice). The slices and the order of the corners are fixed by the input.
+  constexpr std::size_t kSliceFrom = 200'000;
+  std::vector<std::size_t> kept;  // when sliced: the input index of each of cgal_points
+  if (cgal_points.size() >= kSliceFrom) {
+    const std::size_t slices = 8;
+    std::vector<std::vector<std::size_t>> corners(slices);
+    const auto point_of = CGAL::make_property_map(cgal_points);
+    tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t k) {
+      const std::size_t begin = cgal_points.size() * k / slices, end = cgal_points.size() * (k + 1) / slices;
+      std::vector<std::size_t> slice(end - begin);
+      std::iota(slice.begin(), slice.end(), begin);
+      try {
+        CGAL::extreme_points_3(slice, std::back_inserter(corners[k]), CGAL::make_extreme_points_traits_adapter(point_of));
+      } catch (const std::exception&) {
+        corners[k].clear();
+      }
+      if (corners[k].size() < 4) corners[k] = std::move(slice);  // a flat or thinner slice: all of it goes on
+    });
+    for (const std::vector<std::size_t>& c : corners) kept.insert(kept.end(), c.begin(), c.end());
+    std::sort(kept.begin(), kept.end());
+    std::vector<Kernel::Point_3> reduced;
+    reduced.reserve(kept.size());
+    for (const std::size_t i : kept) reduced.push_back(cgal_points[i]);
+    cgal_points.swap(reduced);
+  }
   CGAL::Surface_mesh<Kernel::Point_3> hull;
   CGAL::convex_hull_3(cgal_points.begin(), cgal_points.end(), hull);
 
-  // The hull over input indices. CGAL's vertex and face order depends on memory addresses.
-  // Looked up only, never iterated: the hash order does not reach the output.
-  struct CoordinatesHash {
-    std::size_t operator()(const std::array<double, 3>& c) const {
-      std::size_t h = 0;
-      for (const double x : c) h = h * 0x9E3779B97F4A7C15ull + std::hash<double>{}(x);
-      return h;
-    }
-  };
+  // The hull over input indices (the first input point at each corner). CGAL's vertex and
+  // face order depends on memory addresses.
   std::unordered_map<std::array<double, 3>, VertexIndex, CoordinatesHash> index_of_point;
-  index_of_point.reserve(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    index_of_point.emplace(std::array<double, 3>{points[i].x(), points[i].y(), points[i].z()}, static_cast<VertexIndex>(i));
+  index_of_point.reserve(cgal_points.size());
+  for (std::size_t i = 0; i < cgal_points.size(); ++i) {
+    const std::size_t input = kept.empty() ? i : kept[i];
+    index_of_point.emplace(std::array<double, 3>{points[input].x(), points[input].y(), points[input].z()},
+                           static_cast<VertexIndex>(input));
+  }
   TriangleMesh mesh;
   mesh.positions = points;
   std::vector<VertexIndex> input_index(hull.number_of_vertices());

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <variant>
 
@@ -292,31 +293,14 @@ std::vector<Box> boxes_of(const Triangles& triangles, double grow = 0) {
   return boxes;
 }
 
-}  // namespace
-
-std::vector<PointLocation> locate_points(const TriangleMesh& container, std::span<const Vertex> points) {
-  std::vector<PointLocation> locations(points.size(), PointLocation::outside);
-  if (container.triangles.empty() || points.empty()) return locations;
-  require_in_range(container, "container");
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!(points[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
-      throw InvalidInputError("", "point " + std::to_string(i) + " to locate is not finite or beyond 1e100 in magnitude");
-  const BoundingBox box = bounding_box(container);
-  const double reach = 4.0 * box.diagonal() + 1.0;
-  // The segment from each point in the box, along a fixed generic direction, to a point
-  // beyond the box; retries (below) draw seeded directions.
-  const Vertex direction = Vertex(0.5773502691896258, 0.4472135954999579, 0.6831300510639732).normalized();
-  auto segment_end = [&](const Vertex& v, const Vertex& d) { return v + (reach + (v - box.min).norm() + (v - box.max).norm()) * d; };
-  std::vector<std::uint32_t> active;  // points in the box (the rest are outside)
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!((points[i].array() < box.min.array()).any() || (points[i].array() > box.max.array()).any()))
-      active.push_back(static_cast<std::uint32_t>(i));
-  if (active.empty()) return locations;
-
-  // One pass over the triangles instead of a tree: the points binned on a grid in the plane
-  // across the direction, each triangle tested exactly against the segments of the points in
-  // the cells its shadow on that plane covers. Bins and shadows are computed in double and
-  // padded far beyond their rounding, so no segment that meets a triangle is missed.
+// One pass over the triangles instead of a tree: the points binned on a grid in the plane
+// across the direction, each triangle tested exactly against the segments of the points in
+// the cells its shadow on that plane covers. Bins and shadows are computed in double and
+// padded far beyond their rounding, so no segment that meets a triangle is missed.
+template <class SegmentEnd>
+void scan_first_rays(const TriangleMesh& container, std::span<const Vertex> points, const std::vector<std::uint32_t>& active,
+                     const Vertex& direction, const BoundingBox& box, double reach, const SegmentEnd& segment_end,
+                     std::vector<PointLocation>& locations, std::vector<std::size_t>& retry) {
   const Vertex across_u = direction.cross(std::abs(direction.x()) < 0.9 ? Vertex(1, 0, 0) : Vertex(0, 1, 0)).normalized();
   const Vertex across_v = direction.cross(across_u);
   const double magnitude = std::max({box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff(), 1e-300});
@@ -383,25 +367,56 @@ std::vector<PointLocation> locate_points(const TriangleMesh& container, std::spa
     }
   });
 
-  // Points whose segment met an edge, a vertex or a plane along the way: seeded directions
-  // until one is in general position, through a tree (few points).
-  std::vector<std::size_t> retry;
   for (std::size_t k = 0; k < active.size(); ++k) {
     if (state[k] & 1) locations[active[k]] = PointLocation::on_boundary;
     else if (state[k] & 2) retry.push_back(k);
     else locations[active[k]] = winding[k] != 0 ? PointLocation::inside : PointLocation::outside;
   }
+}
+
+}  // namespace
+
+std::vector<PointLocation> locate_points(const TriangleMesh& container, std::span<const Vertex> points) {
+  std::vector<PointLocation> locations(points.size(), PointLocation::outside);
+  if (container.triangles.empty() || points.empty()) return locations;
+  require_in_range(container, "container");
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!(points[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      throw InvalidInputError("", "point " + std::to_string(i) + " to locate is not finite or beyond 1e100 in magnitude");
+  const BoundingBox box = bounding_box(container);
+  const double reach = 4.0 * box.diagonal() + 1.0;
+  // The segment from each point in the box, along a fixed generic direction, to a point
+  // beyond the box; retries (below) draw seeded directions.
+  const Vertex direction = Vertex(0.5773502691896258, 0.4472135954999579, 0.6831300510639732).normalized();
+  auto segment_end = [&](const Vertex& v, const Vertex& d) { return v + (reach + (v - box.min).norm() + (v - box.max).norm()) * d; };
+  std::vector<std::uint32_t> active;  // points in the box (the rest are outside)
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!((points[i].array() < box.min.array()).any() || (points[i].array() > box.max.array()).any()))
+      active.push_back(static_cast<std::uint32_t>(i));
+  if (active.empty()) return locations;
+  std::vector<std::size_t> retry;  // positions in `active` of the points to trace one by one
+  if (container.triangles.size() * 8 < active.size()) {
+    // Few triangles for many points (a box around a mesh's vertices): each point's ray
+    // through a tree, in parallel over the points.
+    retry.resize(active.size());
+    std::iota(retry.begin(), retry.end(), std::size_t{0});
+  } else {
+    scan_first_rays(container, points, active, direction, box, reach, segment_end, locations, retry);
+  }
   if (retry.empty()) return locations;
   const Triangles triangles = triangles_of(container);
   Tree tree(triangles.begin(), triangles.end());
   tree.build();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, retry.size(), 16), [&](const tbb::blocked_range<std::size_t>& range) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, retry.size(), 64), [&](const tbb::blocked_range<std::size_t>& range) {
     for (std::size_t r = range.begin(); r != range.end(); ++r) {
       const std::size_t i = active[retry[r]];
       const Vertex& point = points[i];
+      // The points the scan left (their first ray in special position) start from the
+      // seeded directions; the others from the fixed one.
+      const bool scanned = container.triangles.size() * 8 >= active.size();
       Random random(0x5EED0000u + i);
-      for (int attempt = 1;; ++attempt) {
-        const Vertex d = random.unit_vector();
+      Vertex d = scanned ? random.unit_vector() : direction;
+      for (int attempt = scanned ? 1 : 0;; ++attempt) {
         bool on = false;
         const std::optional<int> count = winding_along(tree, to_point(point), to_point(segment_end(point, d)), on);
         if (on) {
@@ -413,6 +428,7 @@ std::vector<PointLocation> locate_points(const TriangleMesh& container, std::spa
           break;
         }
         if (attempt == 1000) throw Error("point location: no ray in general position after 1000 tries");
+        d = random.unit_vector();
       }
     }
   });

@@ -1,10 +1,18 @@
 #include "visproxy/proxy/convex_hull.h"
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
 
 #include <string>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
@@ -166,6 +174,55 @@ TEST(ConvexHull, IsDeterministic) {
   EXPECT_EQ(first.mesh, second.mesh);
   EXPECT_EQ(first.faces, second.faces);
   EXPECT_EQ(first.volume, second.volume);
+}
+
+// Over 200 000 points the corners are first found slice by slice in parallel. The hull
+// must be that of all the points: the same corners as CGAL's hull of every point, each the
+// first input vertex at its position (duplicates across slices included), whatever the
+// number of threads. A cube's corners in the last slice only, duplicated in the first, and a
+// dense ball of points with a flat slice of coplanar points among them.
+TEST(ConvexHull, ManyPointsGiveTheHullOfAll) {
+  Random random(3);
+  std::vector<Vertex> points;
+  for (int i = 0; i < 40000; ++i) points.push_back({random.uniform(), random.uniform(), 0.5});  // a flat slice
+  for (int i = 0; i < 200000; ++i) {
+    const Vertex d = random.unit_vector();
+    points.push_back(0.49 * std::cbrt(random.uniform()) * d + Vertex::Constant(0.5));
+  }
+  const Vertex corner(1, 1, 1);
+  points.insert(points.begin() + 5, corner);  // first slice: the duplicate that counts
+  for (int c = 0; c < 8; ++c) points.push_back(Vertex(c & 1, (c >> 1) & 1, (c >> 2) & 1));
+  const TriangleMesh mesh = fan_over(points);
+  ConvexHullResult one, many;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = build_convex_hull(mesh);
+  }
+  many = build_convex_hull(mesh);
+  EXPECT_EQ(one.mesh, many.mesh);
+  EXPECT_EQ(many.mesh.positions.size(), 8u);
+  EXPECT_EQ(many.faces, 6u);
+  EXPECT_DOUBLE_EQ(many.volume, 1.0);
+  EXPECT_TRUE(is_closed_polytope_surface(many.mesh));
+  EXPECT_TRUE(contains_every_vertex(many.mesh, mesh));
+  // Corners keep the input order: (1, 1, 1) first, from its early duplicate.
+  EXPECT_EQ(many.mesh.positions.front(), corner);
+  // A round point set: the corners are CGAL's hull's, for every point.
+  std::vector<Vertex> ball;
+  for (int i = 0; i < 210000; ++i) ball.push_back(random.unit_vector() * std::cbrt(random.uniform()));
+  const ConvexHullResult round = build_convex_hull(fan_over(ball));
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::vector<Kernel::Point_3> all;
+  for (const Vertex& p : ball) all.emplace_back(p.x(), p.y(), p.z());
+  std::vector<Kernel::Point_3> extreme;
+  CGAL::extreme_points_3(all, std::back_inserter(extreme));
+  std::vector<std::array<double, 3>> expected, got;
+  for (const Kernel::Point_3& p : extreme) expected.push_back({p.x(), p.y(), p.z()});
+  for (const Vertex& p : round.mesh.positions) got.push_back({p.x(), p.y(), p.z()});
+  std::sort(expected.begin(), expected.end());
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, expected);
+  EXPECT_TRUE(contains_every_vertex(round.mesh, fan_over(ball)));
 }
 
 class ConvexHullOfRealMesh : public ::testing::TestWithParam<std::string> {};

@@ -157,6 +157,15 @@ TEST(LocatePoints, AgreesWithCgalAtTheSurfaceFarFromTheOriginOnAnyNumberOfThread
   EXPECT_EQ(wrong, 0u);
   EXPECT_GT(inside, 5000u);
   EXPECT_GT(on, 3000u);
+  // Many points in a container of few triangles (each point's ray through a tree): a box
+  // holding the bunny, its corners on the box of the points.
+  TriangleMesh bounds;
+  for (int c = 0; c < 8; ++c)
+    bounds.positions.emplace_back(c & 1 ? box.max.x() : box.min.x(), c & 2 ? box.max.y() : box.min.y(),
+                                  c & 4 ? box.max.z() : box.min.z());
+  bounds.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                      {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  EXPECT_EQ(locate_points(bounds, points), cgal_locations(bounds, points));
   // One point alone (a grid of one cell).
   for (const std::size_t i : {std::size_t{0}, std::size_t{20000}, std::size_t{20001}, std::size_t{20002}})
     EXPECT_EQ(locate_points(bunny, std::vector<Vertex>{points[i]}).front(), expected[i]) << i;
