@@ -42,8 +42,13 @@ foreach(header ${headers})
 endforeach()
 
 # 3. The CLI runs from the prefix.
+string(REGEX MATCH "^([0-9]+)\\.([0-9]+)" major_minor "${VERSION}")
+set(major ${CMAKE_MATCH_1})
+set(minor ${CMAKE_MATCH_2})
+math(EXPR next_minor "${minor} + 1")
+string(REPLACE "." "\\." version_pattern "${VERSION}")
 run("installed visproxy --version" "${prefix}/bin/visproxy" --version)
-if(NOT output MATCHES "0\\.2\\.")
+if(NOT output MATCHES "${version_pattern}")
   message(FATAL_ERROR "installed visproxy --version printed: ${output}")
 endif()
 
@@ -54,23 +59,23 @@ if(NOT output MATCHES "--scheduler")
   message(FATAL_ERROR "installed visproxy-dask --help printed: ${output}")
 endif()
 
-# 4. A CMake consumer: find_package(visproxy 0.2 REQUIRED) and visproxy::visproxy.
+# 4. A CMake consumer: find_package(visproxy MAJOR.MINOR REQUIRED) and visproxy::visproxy.
 run("configuring the consumer" ${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/package/consumer" -B "${WORK_DIR}/consumer"
     -G "${GENERATOR}" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_CXX_COMPILER=${CXX})
 run("building the consumer" ${CMAKE_COMMAND} --build "${WORK_DIR}/consumer")
 run("running the consumer" "${WORK_DIR}/consumer/consumer" "${MESH}")
 message(STATUS "consumer: ${output}")
-if(NOT output MATCHES "contains the mesh: proved" OR NOT output MATCHES "visproxy 0\\.2\\.")
+if(NOT output MATCHES "contains the mesh: proved" OR NOT output MATCHES "visproxy ${version_pattern}")
   message(FATAL_ERROR "the consumer printed: ${output}")
 endif()
 
 # 5. A version that does not match is refused.
 file(WRITE "${WORK_DIR}/wrong/CMakeLists.txt"
-     "cmake_minimum_required(VERSION 3.25)\nproject(wrong LANGUAGES CXX)\nfind_package(visproxy 0.3 REQUIRED)\n")
+     "cmake_minimum_required(VERSION 3.25)\nproject(wrong LANGUAGES CXX)\nfind_package(visproxy ${major}.${next_minor} REQUIRED)\n")
 execute_process(COMMAND ${CMAKE_COMMAND} -S "${WORK_DIR}/wrong" -B "${WORK_DIR}/wrong/build" -G "${GENERATOR}"
                 -DCMAKE_PREFIX_PATH=${prefix} RESULT_VARIABLE code OUTPUT_QUIET ERROR_QUIET)
 if(code EQUAL 0)
-  message(FATAL_ERROR "find_package(visproxy 0.3) accepted version 0.2")
+  message(FATAL_ERROR "find_package(visproxy ${major}.${next_minor}) accepted version ${VERSION}")
 endif()
 
 # 6. pkg-config: the same program compiled with `pkg-config --cflags --libs visproxy`.
@@ -97,7 +102,7 @@ assert vp.verify(vertices, triangles, proxies)[0]["holds"]
 print("python", vp.__version__, vp.__file__)
 ]])
 run("the installed Python module" ${PYTHON} "${WORK_DIR}/installed_module.py" "${MESH}")
-if(NOT output MATCHES "python 0\\.2\\." OR NOT output MATCHES "${prefix}/lib/python3/dist-packages/visproxy")
+if(NOT output MATCHES "python ${version_pattern}" OR NOT output MATCHES "${prefix}/lib/python3/dist-packages/visproxy")
   message(FATAL_ERROR "the installed Python module printed: ${output}")
 endif()
 
