@@ -295,7 +295,7 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   // Sampled Hausdorff distance between the proxy's triangles and the mesh; sphere proxies
   // are measured through the boundary of their union (level-2 icospheres, without the
   // triangles buried in other balls: within 1.3 % of each radius).
-  // The mesh's side is prepared once, for every proxy.
+  // The mesh's side is prepared once, for every proxy (after the builders: see below).
   std::optional<MeasuredSurface> measured_mesh;
   auto measure_error = [&](BuiltProxy& proxy) {
     if (!measured_mesh) measured_mesh.emplace(mesh, "second");
@@ -350,11 +350,7 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       } catch (const InvalidInputError& error) {
         throw InvalidInputError(source, error.problem());
       }
-      for (BuiltProxy& proxy : levels) {
-        measure_gssa(proxy);
-        measure_error(proxy);
-        proxies.push_back(std::move(proxy));
-      }
+      for (BuiltProxy& proxy : levels) proxies.push_back(std::move(proxy));
       continue;
     }
     if (options.on_start) options.on_start(spec.name());
@@ -396,9 +392,15 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       for (const OrientedBox& box : proxy.boxes) boxes.push_back(box_json(box));
       proxy.result["boxes"] = boxes;
     }
-    measure_error(proxy);
     proxies.push_back(std::move(proxy));
   }
+  // The measures once every builder is done, so that the mesh's ray scene and distance tree
+  // are made once and are not held while a builder needs its own memory: the GSSA of the
+  // sphere sets, then every proxy's error.
+  for (BuiltProxy& proxy : proxies)
+    if (proxy.primitive_type == PrimitiveType::sphere) measure_gssa(proxy);
+  reference.reset();
+  for (BuiltProxy& proxy : proxies) measure_error(proxy);
   return proxies;
 }
 
