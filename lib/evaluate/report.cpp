@@ -197,6 +197,8 @@ std::string f_miss_plot_svg(const json& manifest) {
                                    .log_x = true,
                                    .y_min = 0,
                                    .y_max = 1,
+                                   .reference_y = std::nan(""),
+                                   .reference_label = {},
                                    .empty_note = "No proxy measured yet (visproxy measure MESH DIR)"});
 }
 

@@ -315,7 +315,7 @@ void scan_first_rays(const TriangleMesh& container, std::span<const Vertex> poin
     u[k] = p.dot(across_u), v[k] = p.dot(across_v), along[k] = p.dot(direction);
     u_min = std::min(u_min, u[k]), u_max = std::max(u_max, u[k]), v_min = std::min(v_min, v[k]), v_max = std::max(v_max, v[k]);
   }
-  const std::size_t side = std::clamp<std::size_t>(static_cast<std::size_t>(std::sqrt(active.size() / 2.0)), 1, 2048);
+  const std::size_t side = std::clamp<std::size_t>(static_cast<std::size_t>(std::sqrt(static_cast<double>(active.size()) / 2.0)), 1, 2048);
   const double cell_u = std::max((u_max - u_min) / static_cast<double>(side), 1e-300);
   const double cell_v = std::max((v_max - v_min) / static_cast<double>(side), 1e-300);
   auto cell_of = [&](double value, double low, double cell) {
