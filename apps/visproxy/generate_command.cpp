@@ -1,5 +1,6 @@
 // visproxy generate hairball --triangles N -o DIR [--seed S] [--proxy SPEC]...
 // visproxy generate room -o SCENE.json [--proxy SPEC]... [--width W] [--height H]
+// visproxy generate forest -o DIR [--trees N] [--species K] [--seed S] [--proxy SPEC]... [--tree-triangles MIN,MAX]
 
 #include <chrono>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
 #include "visproxy/proxy/manifest.h"
+#include "visproxy/scene/forest.h"
 #include "visproxy/scene/hairball.h"
 #include "visproxy/scene/room.h"
 
@@ -54,6 +56,14 @@ std::string hairball_scene(const GenerateOptions& o) {
          "}\n";
 }
 
+struct ForestCommandOptions {
+  std::filesystem::path folder;
+  ForestOptions forest;
+  std::vector<std::string> proxies = kForestProxies;
+  std::vector<std::size_t> sizes;
+  int width = 640, height = 360;
+};
+
 }  // namespace
 
 void add_generate_command(CLI::App& app, int& exit_code) {
@@ -91,6 +101,65 @@ void add_generate_command(CLI::App& app, int& exit_code) {
                 mesh.triangles.size(), static_cast<unsigned long long>(o->seed), mesh_path.string().c_str(),
                 (o->folder / "hairball.json").string().c_str(), proxies.size(), (o->folder / "proxies").string().c_str(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    exit_code = kSuccess;
+  });
+
+  auto forest = std::make_shared<ForestCommandOptions>();
+  CLI::App* forest_command = generate->add_subcommand(
+      "forest",
+      "A forest of instanced procedural trees on a rolling terrain: writes DIR/tree-K.ply for each species (trunk, "
+      "branches and leaves or needles), DIR/terrain.ply, each species' proxies in DIR/proxies-K (a 'visproxy build' "
+      "folder: aabb, cluster:0.03, hull:32, outer:512 and spheres:100 unless --proxy), and the scene DIR/forest.json, "
+      "which places the trees with seeded transforms and names their proxies.");
+  forest_command->add_option("-o,--output", forest->folder, "Output folder (created if missing)")->required();
+  forest_command->add_option("--trees", forest->forest.trees, "Trees in the scene [default: 10000]")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
+  forest_command->add_option("--species", forest->forest.species, "Distinct tree meshes [default: 4]")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
+  forest_command->add_option("--seed", forest->forest.seed, "Seed of the trees, the terrain, the placements and the proxy builds [default: 1]");
+  forest_command->add_option("--proxy", forest->proxies, "Proxies to build for every species and name in the scene [default: the paper's five]");
+  forest_command->add_option("--tree-triangles", forest->sizes, "Triangles of the smallest and the largest species [default: 30000,1000000]")
+      ->expected(2)->delimiter(',')->check(CLI::Range(std::size_t{500}, std::size_t{50'000'000}));
+  forest_command->add_option("--width", forest->width, "Image width of the scene's camera [default: 640]")->check(CLI::Range(1, 16384));
+  forest_command->add_option("--height", forest->height, "Image height [default: 360]")->check(CLI::Range(1, 16384));
+  forest_command->callback([forest, &exit_code] {
+    const auto start = std::chrono::steady_clock::now();
+    const std::vector<ProxySpec> specs = parse_proxy_specs(forest->proxies);
+    if (forest->sizes.size() == 2) forest->forest.fewest_triangles = forest->sizes[0], forest->forest.most_triangles = forest->sizes[1];
+    if (forest->forest.fewest_triangles > forest->forest.most_triangles)
+      throw InvalidInputError("", "--tree-triangles: the smallest species cannot be larger than the largest");
+    const Forest made = make_forest(forest->forest);
+    std::error_code error;
+    std::filesystem::create_directories(forest->folder, error);
+    if (error) throw IOError(forest->folder, "cannot create the output folder: " + error.message());
+    ForestFiles files;
+    for (std::size_t k = 0; k < made.species.size(); ++k) {
+      const TriangleMesh& tree = made.species[k];
+      const std::string name = "tree-" + std::to_string(k) + ".ply", proxies = "proxies-" + std::to_string(k);
+      const std::filesystem::path mesh_path = forest->folder / name;
+      std::fprintf(stderr, "visproxy generate forest: species %zu of %zu, %zu triangles: building %zu proxies ...\n", k + 1,
+                   made.species.size(), tree.triangles.size(), specs.size());
+      const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = forest->forest.seed, .on_start = {}};
+      const std::vector<BuiltProxy> built = build_proxies(tree, mesh_path, specs, build);
+      write_mesh(mesh_path, tree);
+      write_proxy_folder(forest->folder / proxies,
+                         {.path = mesh_path, .weld = "auto", .vertices = tree.positions.size(), .triangles = tree.triangles.size(),
+                          .components = analyze_topology(tree).components, .bounds = bounding_box(tree)},
+                         built, build);
+      files.species.push_back(name);
+      files.proxy_folders.push_back(proxies);
+    }
+    files.terrain = "terrain.ply";
+    write_mesh(forest->folder / files.terrain, made.terrain);
+    write_file_atomically(forest->folder / "forest.json",
+                          forest_scene_json(made, files, forest->proxies, forest->width, forest->height, forest->forest.seed));
+    std::size_t tree_triangles = 0;
+    for (const TriangleMesh& tree : made.species) tree_triangles += tree.triangles.size();
+    std::printf("visproxy generate forest: %zu trees of %zu species (%zu triangles in all, seed %llu) on a terrain %.1f units across: "
+                "%zu instanced triangles; scene %s, proxies in %s/proxies-K (%.1f s)\n",
+                made.trees.size(), made.species.size(), tree_triangles, static_cast<unsigned long long>(forest->forest.seed),
+                made.extent, made.instanced_triangles(), (forest->folder / "forest.json").string().c_str(),
+                forest->folder.string().c_str(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     exit_code = kSuccess;
   });
 
