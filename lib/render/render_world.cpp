@@ -8,6 +8,8 @@
 #include <map>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/convex_hull.h"
+#include "visproxy/render/box_tree.h"
 #include "visproxy/trace/convex_polytope.h"
 #include "visproxy/trace/embree_support.h"
 #include "visproxy/trace/ray_scene.h"
@@ -89,20 +91,6 @@ struct CountedInstance {
   BoundingBox world;
 };
 
-bool segment_meets_box(const Vertex& from, const Vertex& to, const BoundingBox& box) {
-  double t0 = 0, t1 = 1;
-  const Vertex d = to - from;
-  for (int a = 0; a < 3; ++a) {
-    if (d[a] == 0) {
-      if (from[a] < box.min[a] || from[a] > box.max[a]) return false;
-      continue;
-    }
-    double near = (box.min[a] - from[a]) / d[a], far = (box.max[a] - from[a]) / d[a];
-    if (near > far) std::swap(near, far);
-    t0 = std::max(t0, near), t1 = std::min(t1, far);
-  }
-  return t0 <= t1;
-}
 
 // A convex proxy of one instance, in world space, tested by clipping instead of Embree.
 struct ConvexInstance {
@@ -157,6 +145,25 @@ struct RenderWorld::Impl {
   std::vector<const TriangleMesh*> instance_meshes;
   std::map<std::string, TangentSides> mesh_sides;
   std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
+  // The same over their bounding balls, where there are many: a segment visits only the
+  // solids whose ball's box it meets, in place of every one.
+  std::map<RTCScene, BoxTree> convex_trees;
+  BoxTree instance_tree;
+  static constexpr std::size_t kConvexTreeFrom = 16;
+
+  // Calls meets(instance) for the convex solids of `scene` a segment from `from` to `to`
+  // may meet, until one returns true.
+  template <class Meets>
+  bool any_convex(RTCScene scene, const Vertex& from, const Vertex& to, Meets&& meets) const {
+    const auto it = convex.find(scene);
+    if (it == convex.end()) return false;
+    if (const auto tree = convex_trees.find(scene); tree != convex_trees.end())
+      return tree->second.any([&](const BoundingBox& box, const Sphere&) { return segment_meets_box(from, to, box); },
+                              [&](std::uint32_t k) { return meets(it->second[k]); });
+    for (const ConvexInstance& instance : it->second)
+      if (meets(instance)) return true;
+    return false;
+  }
   std::map<RTCScene, unsigned> embree_masks;  // per top scene: the mask bits of the instances Embree traces
   std::vector<std::string> notes;
   std::vector<std::vector<Sphere>> occluder_spheres;  // per instance, world space
@@ -260,12 +267,12 @@ struct RenderWorld::Impl {
   }
 
   bool blocked(RTCScene scene, const Vertex& from, const Vertex& to, InstanceFilter filter) const {
-    if (const auto it = convex.find(scene); it != convex.end())
-      for (const ConvexInstance& instance : it->second) {
-        if (!filter_passes(instance.id, filter)) continue;
-        if (counting) ++g_thread_counts.nodes, ++g_thread_counts.primitives;  // one solid, clipped
-        if (instance.world.meets_segment(from, to)) return true;
-      }
+    if (any_convex(scene, from, to, [&](const ConvexInstance& instance) {
+          if (!filter_passes(instance.id, filter)) return false;
+          if (counting) ++g_thread_counts.nodes, ++g_thread_counts.primitives;  // one solid, clipped
+          return instance.world.meets_segment(from, to);
+        }))
+      return true;
     // No Embree call when every instance Embree holds here is filtered out (e.g. the only
     // instance without a convex proxy is the one the query skips).
     const auto masks_here = embree_masks.find(scene);
@@ -346,13 +353,11 @@ struct RenderWorld::Impl {
       for (std::size_t i = 0; i < ends.size(); ++i) out[i] = blocked(scene, from, ends[i], lane_filter(i)) ? 1 : 0;
       return;
     }
-    if (const auto it = convex.find(scene); it != convex.end())
-      for (std::size_t i = 0; i < ends.size(); ++i)
-        for (const ConvexInstance& instance : it->second)
-          if (filter_passes(instance.id, lane_filter(i)) && instance.world.meets_segment(from, ends[i])) {
-            out[i] = 1;
-            break;
-          }
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (any_convex(scene, from, ends[i], [&](const ConvexInstance& instance) {
+            return filter_passes(instance.id, lane_filter(i)) && instance.world.meets_segment(from, ends[i]);
+          }))
+        out[i] = 1;
     const auto masks_here = embree_masks.find(scene);
     if (masks_here == embree_masks.end() || (masks_here->second & query_mask(filter)) == 0) return;
     if (packet == 8)
@@ -488,6 +493,21 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
   std::map<std::string, double> least_scale;        // smallest singular value of its instances' transforms
   BoundingBox scene_box = bounding_box(w.lights_world);
   std::vector<BoundingBox> world_boxes;
+  // Each mesh's convex hull corners, once: an instance's world box and bounding ball reach
+  // their extent at a corner (a linear function and a distance from a point are greatest
+  // at a vertex of the hull), so instances of a large mesh need only these.
+  std::map<std::string, std::vector<Vertex>> mesh_corners;
+  auto corners_of = [&](const std::string& name, const TriangleMesh& mesh) -> const std::vector<Vertex>& {
+    auto found = mesh_corners.find(name);
+    if (found != mesh_corners.end()) return found->second;
+    std::vector<Vertex> corners;
+    try {
+      corners = mesh.triangles.size() > 64 ? build_convex_hull(mesh).mesh.positions : used_positions(mesh);
+    } catch (const InvalidInputError&) {  // flat to a line or a point: every vertex
+      corners = used_positions(mesh);
+    }
+    return mesh_corners.emplace(name, std::move(corners)).first->second;
+  };
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {
     const SceneInstance& instance = scene.instances[i];
     const TriangleMesh& mesh = scene.mesh(instance.mesh).mesh;
@@ -507,7 +527,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     const double smallest = Eigen::JacobiSVD<Eigen::Matrix3d>(instance.transform.linear()).singularValues()(2);
     least_scale[instance.mesh] = std::min(least_scale.contains(instance.mesh) ? least_scale[instance.mesh] : smallest, smallest);
     BoundingBox world;
-    for (const Vertex& v : used_positions(mesh)) world.extend(instance.transform * v);
+    for (const Vertex& v : corners_of(instance.mesh, mesh)) world.extend(instance.transform * v);
     world_boxes.push_back(world);
     if (!world.empty()) scene_box.extend(world.min), scene_box.extend(world.max);
   }
@@ -667,7 +687,8 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     w.instance_meshes.push_back(&mesh.mesh);
     BoundingBox world = world_boxes[i];
     Sphere sphere{world.empty() ? Vertex::Zero() : Vertex(0.5 * (world.min + world.max)), 0.0};
-    for (const Vertex& v : used_positions(mesh.mesh)) sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
+    for (const Vertex& v : corners_of(instance.mesh, mesh.mesh))
+      sphere.radius = std::max(sphere.radius, (instance.transform * v - sphere.center).norm());
     if (!world.empty()) {
       world.min.array() -= pad_world;
       world.max.array() += pad_world;
@@ -691,6 +712,22 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
   }
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
   w.device.throw_if_failed();
+  for (const auto& [top, solids] : w.convex) {
+    if (solids.size() < Impl::kConvexTreeFrom) continue;
+    std::vector<BoundingBox> boxes;
+    std::vector<Sphere> balls;
+    for (const ConvexInstance& solid : solids) {
+      const Sphere ball = solid.world.bounding_ball();
+      balls.push_back(ball);
+      BoundingBox box;
+      box.extend(ball.center - Vertex::Constant(ball.radius));
+      box.extend(ball.center + Vertex::Constant(ball.radius));
+      boxes.push_back(box);
+    }
+    w.convex_trees.emplace(top, BoxTree(boxes, balls));
+  }
+  // The instances' world bounds, for queries over whole light shafts.
+  w.instance_tree = BoxTree(w.instance_bounds, w.instance_spheres);
 }
 
 RenderWorld::~RenderWorld() = default;
@@ -784,6 +821,16 @@ ProxyKind RenderWorld::stochastic_kind(int skip) const {
 unsigned instance_bit(std::size_t instance) { return instance_mask(instance); }
 
 const BoundingBox& RenderWorld::instance_bounds(std::size_t instance) const { return impl_->instance_bounds[instance]; }
+
+void RenderWorld::instances_where(const std::function<bool(const BoundingBox&, const Sphere&)>& meets,
+                                  std::vector<std::size_t>& out) const {
+  out.clear();
+  impl_->instance_tree.any(meets, [&](std::uint32_t i) {
+    if (meets(impl_->instance_bounds[i], impl_->instance_spheres[i])) out.push_back(i);
+    return false;
+  });
+  std::sort(out.begin(), out.end());
+}
 const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return impl_->instance_spheres[instance]; }
 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }

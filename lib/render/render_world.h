@@ -3,6 +3,7 @@
 // the proxies the visibility modes use, in one device with shared per-mesh BVHs.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -175,6 +176,13 @@ class RenderWorld {
   /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
+  /// The instances i for which meets(instance_bounds(i), instance_sphere(i)) holds, in
+  /// increasing order, found through a tree over the instances' bounds: `meets` must be
+  /// monotone (false for a box and a ball means false for every box and ball they hold), as
+  /// a conservative "may this region meet that volume" test is. Logarithmic in the instances
+  /// for a region that meets few.
+  void instances_where(const std::function<bool(const BoundingBox&, const Sphere&)>& meets,
+                       std::vector<std::size_t>& out) const;
 
   /// The instances (as instance_bit()s) whose mesh lies on the boundary of its own convex
   /// hull (every triangle in a supporting plane of the mesh's vertices: a box room, a wall,

@@ -245,6 +245,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
   static const json kNone = json::array();
   const json& instances = imports ? (document.contains("instances") ? document["instances"] : kNone) : p.member(document, "instances", "");
   if (!instances.is_array() || (instances.empty() && scene.instances.empty())) p.fail("instances", "expected a non-empty array");
+  std::map<std::string, BoundingBox> mesh_boxes;  // each mesh's box, once, however many instances it has
   for (std::size_t i = 0; i < instances.size(); ++i) {
     const json& value = instances[i];
     const std::string where = json_index_path("instances", i);
@@ -253,7 +254,9 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
     instance.mesh = mesh.name;
     if (const json* transform = p.optional_member(value, "transform", where)) {
       instance.transform = p.transform(*transform, json_member_path(where, "transform"), mesh.mesh);
-      const BoundingBox box = bounding_box(mesh.mesh);
+      auto cached = mesh_boxes.find(mesh.name);
+      if (cached == mesh_boxes.end()) cached = mesh_boxes.emplace(mesh.name, bounding_box(mesh.mesh)).first;
+      const BoundingBox& box = cached->second;
       for (int corner = 0; corner < 8 && !box.empty(); ++corner) {
         const Vertex placed = instance.transform * Vertex(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
                                                           corner & 4 ? box.max.z() : box.min.z());

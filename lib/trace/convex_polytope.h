@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "visproxy/mesh/sphere_set.h"
 #include "visproxy/mesh/triangle_mesh.h"
 
 namespace visproxy {
@@ -43,6 +44,9 @@ class ConvexPolytope {
   bool meets_segment(const Vertex& from, const Vertex& to) const;
 
   const std::vector<Plane>& planes() const { return planes_; }
+
+  /// A ball holding the solid: a segment that misses it misses the solid.
+  Sphere bounding_ball() const { return {center_, radius_}; }
 
  private:
   void pack();  ///< fills packed_ from planes_

@@ -13,7 +13,9 @@
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/proxy/inner_hull.h"
 #include "render/render_test_scenes.h"
+#include "visproxy/render/box_tree.h"
 #include "visproxy/render/renderer.h"
+#include "visproxy/trace/embree_support.h"
 #include "visproxy/verify/containment.h"
 #include "visproxy/verify/sphere_containment.h"
 
@@ -323,6 +325,54 @@ TEST(RenderWorld, TouchingProxiesStayConservativeUnderFloatRounding) {
 // The same scene placed a million units from the origin renders as it does at the origin:
 // points are handed to Embree relative to the scene's centre and meshes relative to their
 // own, and surface offsets follow the coordinates' magnitude there. Bounds stays exact.
+// Hundreds of instances, far from the origin: the proxies go into a tree, and a segment
+// through any one proxy must still find it, one between the rows must find none, and
+// instances_where must list what a scan of every instance lists.
+TEST(RenderWorld, ManyInstancesFarFromTheOriginAreFoundThroughTheTree) {
+  const Vertex offset(4.0e6, -3.0e6, 2.0e5);
+  Scene scene;
+  scene.meshes.push_back({"cube", {}, box({-0.4, -0.4, -0.4}, {0.4, 0.4, 0.4}), {}});
+  std::vector<MeshProxies> proxies;
+  const InstanceProxy cube_box{ProxyKind::outside, "aabb", box({-0.45, -0.45, -0.45}, {0.45, 0.45, 0.45}), {}, true};
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) {
+      Eigen::Affine3d t = Eigen::Affine3d::Identity();
+      t.translate(offset + Vertex(2.0 * i, 2.0 * j, 0)).rotate(Eigen::AngleAxisd(0.1 * (i + j), Vertex::UnitZ()));
+      scene.instances.push_back({"cube", t, Color::Constant(0.5), {}});
+      proxies.push_back({.stochastic = cube_box, .outside = cube_box, .inside = std::nullopt});
+    }
+  scene.lights.push_back(downward_light(offset + Vertex(20, 20, 10), 1));
+  const RenderWorld world(scene, proxies);
+  for (std::size_t k = 0; k < scene.instances.size(); ++k) {
+    const Vertex centre = scene.instances[k].transform.translation();
+    EXPECT_TRUE(world.proxy_blocks(centre + Vertex(0.3, -0.2, 5), centre - Vertex(0.2, -0.1, 5))) << k;
+    EXPECT_TRUE(world.mesh_blocks(centre + Vertex(0.3, -0.2, 5), centre - Vertex(0.2, -0.1, 5))) << k;
+  }
+  for (int i = 0; i < 19; ++i) {  // between the columns, along the rows: the boxes reach 0.64 from a centre
+    const Vertex x = offset + Vertex(2.0 * i + 1, -5, 0);
+    EXPECT_FALSE(world.proxy_blocks(x, x + Vertex(0, 50, 0))) << i;
+  }
+  Random random(5);
+  std::vector<std::size_t> listed;
+  for (int s = 0; s < 200; ++s) {
+    const Vertex from = offset + Vertex(40 * random.uniform() - 1, 40 * random.uniform() - 1, 2 * random.uniform() - 1);
+    const Vertex to = offset + Vertex(40 * random.uniform() - 1, 40 * random.uniform() - 1, 2 * random.uniform() - 1);
+    const auto meets = [&](const BoundingBox& b, const Sphere& ball) {
+      return segment_meets_box(from, to, b) && segment_meets_ball(ball, from, to - from, 0.0, 1.0);
+    };
+    world.instances_where(meets, listed);
+    std::vector<std::size_t> expected;
+    for (std::size_t k = 0; k < scene.instances.size(); ++k)
+      if (meets(world.instance_bounds(k), world.instance_sphere(k))) expected.push_back(k);
+    EXPECT_EQ(listed, expected) << s;
+    bool proxy_met = false;
+    for (const std::size_t k : expected) proxy_met = proxy_met || world.mesh_blocks(from, to, {.skip = -1, .only = int(k)});
+    if (proxy_met) {
+      EXPECT_TRUE(world.proxy_blocks(from, to)) << s;  // the proxies hold the cubes
+    }
+  }
+}
+
 TEST(RenderWorld, SceneFarFromTheOriginRendersAsAtTheOrigin) {
   auto make = [](const Vertex& shift) {
     Scene scene;

@@ -28,6 +28,7 @@ class BoundsPoint final : public PointVisibility {
   BoundsVisibility& shared_;
   ShadingPoint point_;
   std::vector<std::size_t> shaft_instances_;  // the instances (other than the own) the light shaft meets
+  unsigned shaft_bits_ = 0;                   // their instance bits
   bool traced_before_ = false;  // a proof failed here: the next segments go straight to the exact query
   bool proof_failed_ = false, proof_tried_ = false;
   ExactConnections connections_;
@@ -54,9 +55,11 @@ void BoundsPoint::begin(const ShadingPoint& point) {
   shaft_instances_.clear();
   proof_failed_ = proof_tried_ = false;
   LightShaft::From shaft_from = shared_.shaft_.from(point.position);
-  for (std::size_t i = 0; i < shared_.context_.scene.instances.size(); ++i)
-    if (static_cast<int>(i) != own && shared_.shaft_.meets(shaft_from, world.instance_bounds(i), world.instance_sphere(i)))
-      shaft_instances_.push_back(i);
+  world.instances_where([&](const BoundingBox& box, const Sphere& ball) { return shared_.shaft_.meets(shaft_from, box, ball); },
+                        shaft_instances_);
+  std::erase(shaft_instances_, static_cast<std::size_t>(own));
+  shaft_bits_ = 0;
+  for (const std::size_t i : shaft_instances_) shaft_bits_ |= instance_bit(i);
   if (shaft_instances_.empty()) ++point.stats->shafts_culled;
   // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
   traced_before_ = shared_.proof_failures_[point.pixel] >= 2 && point.pass % 8 != 0;
@@ -75,9 +78,14 @@ double BoundsPoint::to_light(const Vertex& end) {
   const Vertex& x = point_.position;
   const int own = point_.hit->instance;
   // Only the instances in the shaft whose bounding sphere this segment meets can block it.
+  // (Among many, their balls are left to the query: the bits are shared beyond 31 instances.)
   unsigned bits = 0;
-  for (const std::size_t i : shaft_instances_)
-    if (segment_meets_ball(world.instance_sphere(i), x, end - x, 0.0, 1.0)) bits |= instance_bit(i);
+  if (shaft_instances_.size() > 31) {
+    bits = shaft_bits_;
+  } else {
+    for (const std::size_t i : shaft_instances_)
+      if (segment_meets_ball(world.instance_sphere(i), x, end - x, 0.0, 1.0)) bits |= instance_bit(i);
+  }
   const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
   bool rest_free = bits == 0;
   if (!rest_free && !traced_before_) {
