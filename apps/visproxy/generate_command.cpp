@@ -11,6 +11,8 @@
 #include "commands.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/verify_proxy.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
@@ -56,6 +58,16 @@ std::string hairball_scene(const GenerateOptions& o) {
          "}\n";
 }
 
+// Verifies every outside and inside proxy of a folder just written and records the verdicts,
+// so that renders of the scene use the proofs without making them again.
+void record_verdicts(const std::filesystem::path& folder, nlohmann::json manifest, const TriangleMesh& mesh) {
+  for (nlohmann::json& entry : manifest["proxies"]) {
+    if (entry_kind(entry) == ProxyKind::general) continue;
+    entry["verify"] = verify_proxy(mesh, manifest, entry, read_proxy_geometry(folder, entry));
+  }
+  write_manifest(folder, manifest);
+}
+
 struct ForestCommandOptions {
   std::filesystem::path folder;
   ForestOptions forest;
@@ -73,7 +85,7 @@ void add_generate_command(CLI::App& app, int& exit_code) {
   CLI::App* hairball = generate->add_subcommand(
       "hairball",
       "A hairball of thin random tubes: writes DIR/hairball.ply, the scene DIR/hairball.json (floor, light, camera) and "
-      "its proxies in DIR/proxies (a 'visproxy build' folder the scene points to).");
+      "its proxies in DIR/proxies (a 'visproxy build' folder the scene points to, its claims verified and recorded).");
   hairball->add_option("--triangles", o->triangles, "About this many triangles [default: 2000000]")
       ->check(CLI::Range(std::size_t{480}, std::size_t{200'000'000}));
   hairball->add_option("-o,--output", o->folder, "Output folder (created if missing)")->required();
@@ -92,10 +104,12 @@ void add_generate_command(CLI::App& app, int& exit_code) {
     const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = o->seed, .on_start = {}};
     const std::vector<BuiltProxy> proxies = build_proxies(mesh, mesh_path, specs, build);
     write_mesh(mesh_path, mesh);
-    write_proxy_folder(o->folder / "proxies",
-                       {.path = mesh_path, .weld = "auto", .vertices = mesh.positions.size(), .triangles = mesh.triangles.size(),
-                        .components = analyze_topology(mesh).components, .bounds = bounding_box(mesh)},
-                       proxies, build);
+    const nlohmann::json manifest =
+        write_proxy_folder(o->folder / "proxies",
+                           {.path = mesh_path, .weld = "auto", .vertices = mesh.positions.size(), .triangles = mesh.triangles.size(),
+                            .components = analyze_topology(mesh).components, .bounds = bounding_box(mesh)},
+                           proxies, build);
+    record_verdicts(o->folder / "proxies", manifest, mesh);
     write_file_atomically(o->folder / "hairball.json", hairball_scene(*o));
     std::printf("visproxy generate hairball: %zu triangles (seed %llu) in %s, scene %s, %zu proxies in %s (%.1f s)\n",
                 mesh.triangles.size(), static_cast<unsigned long long>(o->seed), mesh_path.string().c_str(),
@@ -109,8 +123,9 @@ void add_generate_command(CLI::App& app, int& exit_code) {
       "forest",
       "A forest of instanced procedural trees on a rolling terrain: writes DIR/tree-K.ply for each species (trunk, "
       "branches and leaves or needles), DIR/terrain.ply, each species' proxies in DIR/proxies-K (a 'visproxy build' "
-      "folder: aabb, cluster:0.03, hull:32, outer:512 and spheres:100 unless --proxy), and the scene DIR/forest.json, "
-      "which places the trees with seeded transforms and names their proxies.");
+      "folder: aabb, cluster:0.03, hull:32, outer:512 and spheres:100 unless --proxy, each outside and inside claim "
+      "verified and recorded), and the scene DIR/forest.json, which places the trees with seeded transforms and names "
+      "their proxies.");
   forest_command->add_option("-o,--output", forest->folder, "Output folder (created if missing)")->required();
   forest_command->add_option("--trees", forest->forest.trees, "Trees in the scene [default: 10000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000}));
@@ -119,7 +134,7 @@ void add_generate_command(CLI::App& app, int& exit_code) {
   forest_command->add_option("--seed", forest->forest.seed, "Seed of the trees, the terrain, the placements and the proxy builds [default: 1]");
   forest_command->add_option("--proxy", forest->proxies, "Proxies to build for every species and name in the scene [default: the paper's five]");
   forest_command->add_option("--tree-triangles", forest->sizes, "Triangles of the smallest and the largest species [default: 30000,1000000]")
-      ->expected(2)->delimiter(',')->check(CLI::Range(std::size_t{500}, std::size_t{50'000'000}));
+      ->expected(2)->delimiter(',')->check(CLI::Range(std::size_t{4000}, std::size_t{50'000'000}));
   forest_command->add_option("--width", forest->width, "Image width of the scene's camera [default: 640]")->check(CLI::Range(1, 16384));
   forest_command->add_option("--height", forest->height, "Image height [default: 360]")->check(CLI::Range(1, 16384));
   forest_command->callback([forest, &exit_code] {
@@ -142,10 +157,12 @@ void add_generate_command(CLI::App& app, int& exit_code) {
       const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = forest->forest.seed, .on_start = {}};
       const std::vector<BuiltProxy> built = build_proxies(tree, mesh_path, specs, build);
       write_mesh(mesh_path, tree);
-      write_proxy_folder(forest->folder / proxies,
-                         {.path = mesh_path, .weld = "auto", .vertices = tree.positions.size(), .triangles = tree.triangles.size(),
-                          .components = analyze_topology(tree).components, .bounds = bounding_box(tree)},
-                         built, build);
+      const nlohmann::json manifest =
+          write_proxy_folder(forest->folder / proxies,
+                             {.path = mesh_path, .weld = "auto", .vertices = tree.positions.size(), .triangles = tree.triangles.size(),
+                              .components = analyze_topology(tree).components, .bounds = bounding_box(tree)},
+                             built, build);
+      record_verdicts(forest->folder / proxies, manifest, tree);
       files.species.push_back(name);
       files.proxy_folders.push_back(proxies);
     }

@@ -13,6 +13,8 @@
 #include "apps/cli_test_support.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/write_mesh.h"
 #include "visproxy/render/image.h"
 #include "test_support.h"
 
@@ -113,6 +115,53 @@ TEST_F(CliRender, GeneratedHairballBoundsMatchesExact) {
   EXPECT_TRUE(std::filesystem::exists(folder_ / "hairball" / "proxies" / "manifest.json"));
   testing::expect_described(json::parse(read_file(folder_ / "hairball" / "hairball.json")), "scene.schema.json");
   expect_bounds_identical_and_finite(*this, folder_ / "hairball" / "hairball.json", "--width 40 --height 30");
+}
+
+// `generate forest` records a verdict for every outside claim, so a render proves nothing
+// again; every mode renders it, bounds bit for bit as exact. A proxy shrunk by hand after
+// generation no longer matches its verdict: the render verifies it again, finds it fails,
+// uses it as a general proxy, and bounds still gives exact's image.
+TEST_F(CliRender, GeneratedForestRendersInEveryModeAndAnEditedProxyIsProvedAgain) {
+  const std::filesystem::path out = folder_ / "forest";
+  const auto generated = testing::run_visproxy("generate forest --trees 40 --species 2 --tree-triangles 4000,6000 --width 40 "
+                                               "--height 30 -o '" + out.string() + "'");
+  ASSERT_EQ(generated.exit_code, 0) << generated.err;
+  testing::expect_described(json::parse(read_file(out / "forest.json")), "scene.schema.json");
+  std::size_t proved = 0;
+  for (const char* folder : {"proxies-0", "proxies-1"}) {
+    const json written = json::parse(read_file(out / folder / "manifest.json"));
+    for (const json& entry : written.at("proxies"))
+      if (entry.at("kind") == "outside") {
+        EXPECT_EQ(entry.at("verify").at("holds"), true) << folder << " " << entry.at("name");
+        ++proved;
+      }
+  }
+  EXPECT_EQ(proved, 6u);  // aabb, hull:32 and outer:512 of each species
+  const auto first = render(out / "forest.json", "first", "--visibility bounds --spp 1 --width 40 --height 30");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  EXPECT_EQ(first.err.find("verified"), std::string::npos) << first.err;
+  expect_bounds_identical_and_finite(*this, out / "forest.json", "--width 40 --height 30");
+
+  // Shrink species 0's aabb (the outside proxy bounds uses) to half its size about its
+  // centre, as a careless edit would.
+  const json manifest = json::parse(read_file(out / "proxies-0" / "manifest.json"));
+  std::filesystem::path aabb;
+  for (const json& entry : manifest.at("proxies"))
+    if (entry.at("name") == "aabb") aabb = out / "proxies-0" / entry.at("file").get<std::string>();
+  ASSERT_FALSE(aabb.empty());
+  TriangleMesh shrunk = read_mesh(aabb);
+  const BoundingBox box = bounding_box(shrunk);
+  for (Vertex& p : shrunk.positions) p = 0.5 * (box.min + box.max) + 0.5 * (p - 0.5 * (box.min + box.max));
+  write_mesh(aabb, shrunk);
+  const std::string options = "--spp 2 --shadow-rays 2 --seed 5 --width 40 --height 30";
+  const auto exact = render(out / "forest.json", "edited-exact", "--visibility exact " + options);
+  const auto bounds = render(out / "forest.json", "edited-bounds", "--visibility bounds " + options);
+  ASSERT_EQ(exact.exit_code, 0) << exact.err;
+  ASSERT_EQ(bounds.exit_code, 0) << bounds.err;
+  EXPECT_NE(bounds.err.find("verified aabb of tree0: does not hold"), std::string::npos) << bounds.err;
+  EXPECT_EQ(image("edited-exact").pixels, image("edited-bounds").pixels);
+  const json stats = json::parse(read_file(folder_ / "edited-bounds.stats.json"));
+  EXPECT_GT(stats.at("stats").at("bounds").at("unoccluded_by_outside_proxies").get<std::uint64_t>(), 0u);  // tree1's box still proves
 }
 
 // `generate room` writes a scene the schema describes; lightcuts renders it with and without
