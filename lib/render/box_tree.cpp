@@ -46,7 +46,7 @@ BoxTree::BoxTree(const std::vector<BoundingBox>& boxes, const std::vector<Sphere
     }
     const double pad = 0x1.0p-40 * std::max({box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff(), radius});
     box.min.array() -= pad, box.max.array() += pad;
-    Node node{box, {center, radius + pad}, first, count};
+    Node node{box, {center, radius + pad}, first, count, 0};
     if (count > 4) {
       int axis = 0;
       (middles.max - middles.min).maxCoeff(&axis);
@@ -58,7 +58,7 @@ BoxTree::BoxTree(const std::vector<BoundingBox>& boxes, const std::vector<Sphere
       const auto left = static_cast<std::uint32_t>(nodes_.size());
       nodes_.emplace_back();
       nodes_.emplace_back();
-      node.first = left, node.count = 0;
+      node.first = left, node.count = 0, node.axis = axis;
       nodes_[at] = node;
       build(left, first, mid - first);
       build(left + 1, mid, first + count - mid);

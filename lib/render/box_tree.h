@@ -27,6 +27,14 @@ class BoxTree {
   /// true, and returns whether it did.
   template <class MayMeet, class Visit>
   bool any(MayMeet&& may_meet, Visit&& visit) const {
+    return any_along(Vertex::Zero(), may_meet, visit);
+  }
+  /// any(), visiting at each node first the child whose items lie further back along
+  /// `direction` (the child of smaller centres where direction[axis] >= 0): for a segment
+  /// leaving along it, the leaves near its start come first (a leaf's few items in no
+  /// order), so an early stop comes early.
+  template <class MayMeet, class Visit>
+  bool any_along(const Vertex& direction, MayMeet&& may_meet, Visit&& visit) const {
     if (nodes_.empty()) return false;
     std::uint32_t stack[64];
     int top = 0;
@@ -38,8 +46,9 @@ class BoxTree {
         for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
           if (visit(order_[k])) return true;
       } else {
-        stack[top++] = node.first;       // left child
-        stack[top++] = node.first + 1;  // right child
+        const bool left_first = direction[node.axis] >= 0;  // popped last, visited first
+        stack[top++] = left_first ? node.first + 1 : node.first;
+        stack[top++] = left_first ? node.first : node.first + 1;
       }
     }
     return false;
@@ -51,6 +60,7 @@ class BoxTree {
     Sphere ball;
     std::uint32_t first = 0;  ///< a leaf's first item in order_, or an inner node's left child
     std::uint32_t count = 0;  ///< items of a leaf; 0 for an inner node
+    int axis = 0;             ///< an inner node's split: its left child has the smaller centres along it
   };
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;

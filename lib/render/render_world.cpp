@@ -158,7 +158,7 @@ struct RenderWorld::Impl {
     const auto it = convex.find(scene);
     if (it == convex.end()) return false;
     if (const auto tree = convex_trees.find(scene); tree != convex_trees.end())
-      return tree->second.any([&](const BoundingBox& box, const Sphere&) { return segment_meets_box(from, to, box); },
+      return tree->second.any_along(to - from, [&](const BoundingBox& box, const Sphere&) { return segment_meets_box(from, to, box); },
                               [&](std::uint32_t k) { return meets(it->second[k]); });
     for (const ConvexInstance& instance : it->second)
       if (meets(instance)) return true;

@@ -122,6 +122,46 @@ TEST(BoxTree, BoxesSharingOneCentreAndEmptyBoxes) {
   EXPECT_FALSE(none.any([](const BoundingBox&, const Sphere&) { return true; }, [](std::uint32_t) { return true; }));
 }
 
+// Ordered along a direction, the search finds the same items, and among boxes in a row it
+// comes to the nearest leaf first, from either end.
+TEST(BoxTree, AlongADirectionTheSameItemsNearestFirst) {
+  const Items items = scattered(3000, Vertex(1.0e6, 0, 0), 9);
+  const BoxTree tree(items.boxes, items.balls);
+  Random random(10);
+  for (int s = 0; s < 100; ++s) {
+    const Vertex from = Vertex(1.0e6, 0, 0) + 100.0 * Vertex(random.uniform(), random.uniform(), random.uniform());
+    const Vertex to = Vertex(1.0e6, 0, 0) + 100.0 * Vertex(random.uniform(), random.uniform(), random.uniform());
+    std::vector<std::uint32_t> along;
+    tree.any_along(
+        to - from, [&](const BoundingBox& box, const Sphere&) { return segment_meets_box(from, to, box); },
+        [&](std::uint32_t i) {
+          if (segment_meets_box(from, to, items.boxes[i])) along.push_back(i);
+          return false;
+        });
+    std::sort(along.begin(), along.end());
+    EXPECT_EQ(along, scanned(items, from, to, false)) << s;
+  }
+  Items row;
+  for (int i = 0; i < 200; ++i) {
+    BoundingBox box;
+    box.extend(Vertex(2.0 * i, 0, 0)), box.extend(Vertex(2.0 * i + 1, 1, 1));
+    row.boxes.push_back(box);
+  }
+  const BoxTree line(row.boxes, {});
+  for (const double sign : {1.0, -1.0}) {
+    std::uint32_t first = 0, visits = 0;
+    line.any_along(
+        Vertex(sign, 0.01, 0), [](const BoundingBox&, const Sphere&) { return true; },
+        [&](std::uint32_t i) {
+          first = i, ++visits;
+          return true;
+        });
+    EXPECT_EQ(visits, 1u);
+    // The nearest leaf (of at most 4 items, in no order within it) comes first.
+    EXPECT_TRUE(sign > 0 ? first < 4u : first > 195u) << first;
+  }
+}
+
 TEST(BoxTree, StopsAtTheFirstItemVisitAccepts) {
   const Items items = scattered(1000, Vertex::Zero(), 7);
   const BoxTree tree(items.boxes, items.balls);
