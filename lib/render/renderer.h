@@ -86,6 +86,11 @@ struct RenderOptions {
   /// Occluder disks: test the bound of each cluster of an instance's balls
   /// (RenderWorld::occluder_clusters) before its balls; same answers, fewer comparisons.
   bool disk_clusters = true;
+  /// Occluder disks: from this many instances with a sphere set on, a shading point makes
+  /// an instance's disks only when one of its segments may meet the instance's balls
+  /// (PointDisks), so that its cost follows the instances its segments pass, not all of
+  /// them; same answers.
+  std::size_t disk_lazy_from = 32;
   double seconds = 0;              ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;

@@ -17,6 +17,7 @@
 #include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
 #include "visproxy/render/virtual_point_lights.h"
+#include "visproxy/render/visibility/occluder_disks.h"
 
 namespace visproxy {
 namespace {
@@ -443,6 +444,122 @@ TEST(VplIntegrator, ControlVariateWithOccluderDisksIsUnbiasedAndTheDisksAloneAre
       EXPECT_GT(error, 0) << variant.label;  // the corrections did work
     }
   }
+}
+
+// A crowd of 60 instances (beyond the 31 mask bits) far from the origin, each with a
+// sphere set of one ball sticking out of its mesh's box, one ball the floor cuts (shading
+// points inside it) and four specks of radius 1e-4 (the single-precision test's coarsest
+// cones), over a floor without one. Disks made lazily through the instance tree give the
+// images of every disk made at each point, bit for bit, in every mode that uses disks.
+struct CrowdScene {
+  Scene scene;
+  std::vector<MeshProxies> proxies;
+};
+
+CrowdScene disk_crowd(const Vertex& offset) {
+  CrowdScene c;
+  c.scene.meshes.push_back({"floor", {}, quad(offset + Vertex(-6, -6, 0), {12, 0, 0}, {0, 12, 0}), {}});
+  c.scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 0.6}, 0.4}}, 2), {}});
+  c.scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  c.proxies.resize(1);
+  Random random(3);
+  for (int i = 0; i < 60; ++i) {
+    Eigen::Affine3d t = Eigen::Affine3d::Identity();
+    t.translate(offset + Vertex(1.4 * (i % 8) - 5, 1.4 * (i / 8) - 5, 0)).rotate(Eigen::AngleAxisd(0.3 * i, Vertex::UnitZ()));
+    c.scene.instances.push_back({"ball", t, Color::Constant(0.6), {}});
+    std::vector<Sphere> balls = {{{0.1, 0, 0.7}, 0.55}, {{0, 0, 0.05}, 0.2}};
+    for (int k = 0; k < 4; ++k) balls.push_back({{random.uniform() - 0.5, random.uniform() - 0.5, 0.3 + random.uniform()}, 1e-4});
+    MeshProxies p;
+    p.stochastic = InstanceProxy{ProxyKind::general, "spheres:6", {}, balls, false};
+    c.proxies.push_back(p);
+  }
+  AreaLight light;
+  light.radiance = Color::Constant(20);
+  const Vertex corner = offset + Vertex(-1, -1, 6), u(0, 2, 0), v(2, 0, 0);
+  light.triangles = {{corner, corner + u, corner + u + v}, {corner, corner + u + v, corner + v}};
+  c.scene.lights.push_back(light);
+  c.scene.camera.from = offset + Vertex(0, -9, 5);
+  c.scene.camera.at = offset;
+  c.scene.camera.up = {0, 0, 1};
+  c.scene.camera.fov_degrees = 60;
+  c.scene.camera.width = 48, c.scene.camera.height = 32;
+  return c;
+}
+
+TEST(OccluderDisks, LazyDisksGiveTheImagesOfEveryDisk) {
+  for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(2.0e5, -3.0e5, 1.0e4)}) {
+    const CrowdScene c = disk_crowd(offset);
+    const RenderWorld world(c.scene, c.proxies);
+    for (const SelfShadow self : {SelfShadow::none, SelfShadow::heuristic, SelfShadow::exact})
+      for (const bool clusters : {true, false})
+        for (const VisibilityMode visibility : {VisibilityMode::spheres, VisibilityMode::stochastic}) {
+          RenderOptions options{.integrator = IntegratorKind::vpl, .visibility = visibility, .probabilities = ProbabilityMode::learned,
+                                .estimator = StochasticEstimator::control_variate, .spp = 2, .seed = 7, .vpls = 64, .bounces = 2};
+          options.self_shadow = self, options.disk_clusters = clusters;
+          options.disk_lazy_from = std::size_t{1} << 30;  // every disk at every point
+          const RenderResult every = render(c.scene, world, options);
+          options.disk_lazy_from = 1;
+          const RenderResult lazy = render(c.scene, world, options);
+          const std::string label = std::string(visibility_mode_name(visibility)) + " " + std::string(self_shadow_name(self)) +
+                                    (clusters ? " clusters" : " no clusters") + " offset " + std::to_string(offset.x());
+          EXPECT_EQ(every.image.pixels, lazy.image.pixels) << label;
+          EXPECT_LT(lazy.stats.disk_tests, every.stats.disk_tests) << label;  // the tree left disks untested
+          EXPECT_GT(lazy.stats.disk_tests, 0u) << label;
+        }
+    // The direct integrator's shadow rays through the same disks.
+    RenderOptions direct{.visibility = VisibilityMode::spheres, .spp = 2, .shadow_rays = 3, .seed = 7};
+    direct.disk_lazy_from = std::size_t{1} << 30;
+    const RenderResult every = render(c.scene, world, direct);
+    direct.disk_lazy_from = 1;
+    EXPECT_EQ(every.image.pixels, render(c.scene, world, direct).image.pixels);
+  }
+}
+
+// Segments that graze the specks' cones, where single precision errs most: one point's
+// lazy disks (through the tree) answer as all of its disks do, segment by segment and in
+// groups, with rays at angles from the cone's edge of -1e-3 to 1e-3 radians.
+TEST(OccluderDisks, LazyDisksAnswerAsEveryDiskAtTheConesEdges) {
+  const CrowdScene c = disk_crowd(Vertex(2.0e5, -3.0e5, 1.0e4));
+  const RenderWorld world(c.scene, c.proxies);
+  const std::size_t instances = c.scene.instances.size();
+  const OccluderDiskIndex lazy_index(world, instances, 1), every_index(world, instances, std::size_t{1} << 30);
+  ASSERT_TRUE(lazy_index.lazy());
+  ASSERT_FALSE(every_index.lazy());
+  Random random(11);
+  std::size_t hidden = 0, shown = 0;
+  for (int point = 0; point < 40; ++point) {
+    SurfaceHit hit;
+    hit.instance = 0;
+    hit.normal = Vertex::UnitZ();
+    hit.position = Vertex(2.0e5, -3.0e5, 1.0e4) + Vertex(10 * random.uniform() - 5, 10 * random.uniform() - 5, 1e-3);
+    PointDisks lazy, every;
+    lazy.begin(lazy_index, hit, hit.position, false, true, 4096, true);
+    every.begin(every_index, hit, hit.position, false, true, 4096, true);
+    std::vector<Vertex> ends;
+    for (std::size_t i = 1; i < instances; ++i)
+      for (const Sphere& ball : world.occluder_spheres(i)) {
+        const Vertex v = ball.center - hit.position;
+        const double t = v.norm();
+        if (t <= ball.radius || v.z() <= 0) continue;
+        const double gamma = std::asin(ball.radius / t);
+        const Vertex side = v.cross(Vertex(random.uniform(), random.uniform(), random.uniform())).normalized();
+        for (const double off : {-1e-3, -1e-5, -1e-7, 0.0, 1e-7, 1e-5, 1e-3}) {
+          const Eigen::AngleAxisd turn(gamma + off, side);
+          ends.push_back(hit.position + (turn * v) * (1.0 + 2.0 * random.uniform()));
+        }
+      }
+    std::uint64_t tests = 0;
+    std::vector<std::uint8_t> a(ends.size()), b(ends.size());
+    lazy.occludes(ends, a, tests);
+    every.occludes(ends, b, tests);
+    for (std::size_t k = 0; k < ends.size(); ++k) {
+      ASSERT_EQ(a[k], b[k]) << "point " << point << " segment " << k;
+      EXPECT_EQ(lazy.occludes(ends[k], tests), b[k] != 0) << "point " << point << " segment " << k;
+      (b[k] ? hidden : shown) += 1;
+    }
+  }
+  EXPECT_GT(hidden, 1000u);
+  EXPECT_GT(shown, 1000u);
 }
 
 // Self-shadowing (occluding-spheres §4.2), on a floor whose own sphere set is one ball of

@@ -1,6 +1,7 @@
 // Stochastic visibility with the proxy as a control variate: V' + (V - V') [u < q] / q, with
 // q chosen by the proxy's answer (equal, adaptive from probe rays, or learned per pixel).
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -53,7 +54,7 @@ class ControlVariatePoint final : public PointVisibility {
   double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
   void learn(bool proxy_blocked, bool mesh_blocked);
   bool disks_in_use_ = false;
-  OccluderDisks disks_;
+  PointDisks disks_;
   ExactConnections exact_part_;  // traced exactly: the own instance when splitting, instances without sphere sets
   InstanceFilter disk_part_;     // the instances the disks stand for
   bool any_exact_ = false;
@@ -79,6 +80,7 @@ class ControlVariateVisibility final : public Visibility {
     kinds_ = stochastic_kinds(context);
     for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
       disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
+    if (disks_) disk_index_.emplace(context.world, context.scene.instances.size(), context.options.disk_lazy_from);
   }
   std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<ControlVariatePoint>(*this); }
 
@@ -90,6 +92,7 @@ class ControlVariateVisibility final : public Visibility {
   std::vector<RayTypeCounts> pixel_probes_;        // adaptive with probe_passes > 0
   std::vector<CorrectionEvidence> pixel_evidence_;  // learned: what each pixel's corrections showed so far
   bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
+  std::optional<OccluderDiskIndex> disk_index_;
 };
 
 void ControlVariatePoint::begin(const ShadingPoint& point) {
@@ -114,9 +117,8 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   // Traced exactly: the own instance when splitting, and every instance without a sphere
   // set. The disks stand for the others.
   const DiskPartition partition =
-      prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
-                             options.split, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from,
-                             options.disk_clusters);
+      disks_.begin(*shared_.disk_index_, *point.hit, point.position, options.split, options.self_shadow == SelfShadow::heuristic,
+                   options.disk_grid_from, options.disk_clusters);
   exact_part_.begin(shared_.context_.world, point.position, partition.traced);
   disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
   any_exact_ = partition.traced != 0;

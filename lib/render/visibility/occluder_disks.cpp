@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -214,11 +215,16 @@ void OccluderDisks::finish(bool grid) {
 
 bool OccluderDisks::occludes(const Vertex& end, std::uint64_t& tests) const {
   if (count_ == 0) return false;
+  return occludes_groups(end, 0, groups_.size(), tests);
+}
+
+bool OccluderDisks::occludes_groups(const Vertex& end, std::size_t first, std::size_t last, std::uint64_t& tests) const {
+  if (first >= last) return false;
   const Vertex w = end - x_;
   const float zf = segment_length(w);
   if (!(zf > 0)) return false;
   const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z());
-  for (std::size_t g = 0; g < groups_.size(); ++g) {
+  for (std::size_t g = first; g < last; ++g) {
     const DiskGroup& group = groups_[g];
     if (group.cos >= -1) {
       ++tests;
@@ -445,6 +451,122 @@ DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& wo
   return partition;
 }
 
+OccluderDiskIndex::OccluderDiskIndex(const RenderWorld& world, std::size_t instances, std::size_t lazy_from)
+    : world_(&world), instances_(instances), has_spheres_(instances, 0) {
+  std::size_t with = 0;
+  for (std::size_t i = 0; i < instances; ++i) {
+    const std::vector<Sphere>& balls = world.occluder_spheres(i);
+    const std::size_t bit = static_cast<std::size_t>(std::countr_zero(instance_bit(i)));
+    if (balls.empty()) {
+      ++without_spheres_[bit], without_bits_ |= instance_bit(i);
+      continue;
+    }
+    has_spheres_[i] = 1, ++with;
+    ++with_spheres_[bit], with_bits_ |= instance_bit(i);
+  }
+  lazy_ = with >= lazy_from;
+  if (!lazy_) return;
+  std::vector<BoundingBox> boxes;
+  for (std::size_t i = 0; i < instances; ++i) {
+    const std::vector<Sphere>& balls = world.occluder_spheres(i);
+    const std::vector<SphereCluster>& clusters = world.occluder_clusters(i);
+    for (std::size_t c = 0; c < clusters.size(); ++c) {
+      if (clusters[c].children > 0) continue;
+      BoundingBox box;
+      for (std::uint32_t k = clusters[c].begin; k < clusters[c].end; ++k) {
+        box.extend(balls[k].center - Vertex::Constant(balls[k].radius));
+        box.extend(balls[k].center + Vertex::Constant(balls[k].radius));
+      }
+      runs_.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(c)});
+      boxes.push_back(box);
+    }
+  }
+  tree_ = BoxTree(boxes, {});
+}
+
+DiskPartition PointDisks::begin(const OccluderDiskIndex& index, const SurfaceHit& hit, const Vertex& position, bool trace_own,
+                                bool own_heuristic, std::size_t grid_from, bool clusters) {
+  index_ = &index;
+  if (!index.lazy())
+    return prepare_occluder_disks(disks_, *index.world_, index.instances_, hit, position, trace_own, own_heuristic, grid_from,
+                                  clusters);
+  // As prepare_occluder_disks() sets the bits, from the counts per bit: only the own
+  // instance's bit can differ from the scene's.
+  disks_.reset(position, hit.normal);
+  disks_.finish(false);
+  x_ = position, own_ = hit.instance, own_heuristic_ = own_heuristic, clusters_ = clusters;
+  DiskPartition partition{.traced = index.without_bits_, .disks = index.with_bits_};
+  skip_own_ = false;
+  if (own_ >= 0) {
+    const auto own = static_cast<std::size_t>(own_);
+    const unsigned bit = instance_bit(own);
+    std::uint32_t without = index.without_spheres_[static_cast<std::size_t>(std::countr_zero(bit))];
+    std::uint32_t with = index.with_spheres_[static_cast<std::size_t>(std::countr_zero(bit))];
+    bool own_traced = false;
+    if (!index.has_spheres_[own]) {
+      if (hit.own_mesh_behind) --without;
+    } else if (trace_own) {
+      --with, skip_own_ = true;
+      own_traced = !hit.own_mesh_behind;
+    }
+    partition.traced = (partition.traced & ~bit) | (without > 0 || own_traced ? bit : 0u);
+    partition.disks = (partition.disks & ~bit) | (with > 0 ? bit : 0u);
+  }
+  if (made_.size() != index.runs_.size()) made_.assign(index.runs_.size(), 0), group_.resize(index.runs_.size()), stamp_ = 0;
+  if (++stamp_ == 0) std::fill(made_.begin(), made_.end(), 0), stamp_ = 1;  // after 2^32 points
+  return partition;
+}
+
+namespace {
+constexpr std::uint32_t kNoGroup = ~std::uint32_t{0};
+}  // namespace
+
+bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
+  if (!index_->lazy()) return disks_.occludes(end, tests);
+  const Vertex w = end - x_;
+  const double margin = std::ldexp(w.norm(), -8);
+  // The slab test of the segment from x lengthened by 2^-8 against the boxes grown by the
+  // margin, with the reciprocals of its direction made once.
+  const Vertex d = (1 + std::ldexp(1.0, -8)) * w;
+  const Vertex inverse(1 / d.x(), 1 / d.y(), 1 / d.z());
+  const RenderWorld& world = *index_->world_;
+  return index_->tree_.any_along(
+      w, [&](const BoundingBox& box, const Sphere&) {
+        double t0 = 0, t1 = 1;
+        for (int a = 0; a < 3; ++a) {
+          const double low = box.min[a] - margin, high = box.max[a] + margin;
+          if (d[a] == 0) {
+            if (x_[a] < low || x_[a] > high) return false;
+            continue;
+          }
+          double near = (low - x_[a]) * inverse[a], far = (high - x_[a]) * inverse[a];
+          if (inverse[a] < 0) std::swap(near, far);
+          t0 = std::max(t0, near), t1 = std::min(t1, far);
+          if (t0 > t1) return false;
+        }
+        return true;
+      },
+      [&](std::uint32_t r) {
+        const OccluderDiskIndex::Run run = index_->runs_[r];
+        const bool own = static_cast<int>(run.instance) == own_;
+        if (own && skip_own_) return false;
+        if (made_[r] != stamp_) {
+          const std::vector<Sphere>& balls = world.occluder_spheres(run.instance);
+          const SphereCluster& cluster = world.occluder_clusters(run.instance)[run.cluster];
+          const std::size_t first = disks_.groups();
+          disks_.add_run(balls.data() + cluster.begin, balls.data() + cluster.end, own && own_heuristic_,
+                         clusters_ ? &cluster.bound : nullptr);
+          made_[r] = stamp_, group_[r] = disks_.groups() > first ? static_cast<std::uint32_t>(first) : kNoGroup;
+        }
+        return group_[r] != kNoGroup && disks_.occludes_groups(end, group_[r], group_[r] + 1, tests);
+      });
+}
+
+void PointDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) {
+  if (!index_->lazy()) return disks_.occludes(ends, hidden, tests);
+  for (std::size_t k = 0; k < ends.size(); ++k) hidden[k] = occludes(ends[k], tests) ? 1 : 0;
+}
+
 namespace {
 
 class OccluderDiskVisibility;
@@ -460,7 +582,7 @@ class OccluderDiskPoint final : public PointVisibility {
  private:
   const OccluderDiskVisibility& shared_;
   ShadingPoint point_;
-  OccluderDisks disks_;
+  PointDisks disks_;
   ExactConnections traced_;  // the instances traced exactly
   bool any_traced_ = false;
   std::vector<Vertex> rest_;
@@ -472,21 +594,22 @@ class OccluderDiskPoint final : public PointVisibility {
 
 class OccluderDiskVisibility final : public Visibility {
  public:
-  explicit OccluderDiskVisibility(const VisibilityContext& context) : context_(context) {}
+  explicit OccluderDiskVisibility(const VisibilityContext& context)
+      : context_(context), index_(context.world, context.scene.instances.size(), context.options.disk_lazy_from) {}
   std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<OccluderDiskPoint>(*this); }
 
  private:
   friend class OccluderDiskPoint;
   VisibilityContext context_;
+  OccluderDiskIndex index_;
 };
 
 void OccluderDiskPoint::begin(const ShadingPoint& point) {
   point_ = point;
   const RenderOptions& options = shared_.context_.options;
   const DiskPartition partition =
-      prepare_occluder_disks(disks_, shared_.context_.world, shared_.context_.scene.instances.size(), *point.hit, point.position,
-                             options.self_shadow == SelfShadow::exact, options.self_shadow == SelfShadow::heuristic, options.disk_grid_from,
-                             options.disk_clusters);
+      disks_.begin(shared_.index_, *point.hit, point.position, options.self_shadow == SelfShadow::exact,
+                   options.self_shadow == SelfShadow::heuristic, options.disk_grid_from, options.disk_clusters);
   traced_.begin(shared_.context_.world, point.position, partition.traced);
   any_traced_ = partition.traced != 0;
 }

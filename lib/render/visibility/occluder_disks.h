@@ -6,11 +6,14 @@
 // ball costs one direction and one cosine; each segment then costs a dot product and two
 // comparisons per ball.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <span>
 #include <vector>
 
+#include "visproxy/render/box_tree.h"
 #include "visproxy/render/render_world.h"
 #include "visproxy/render/renderer.h"
 
@@ -61,6 +64,14 @@ class OccluderDisks {
   /// segment of the chunk not hidden yet lies in its bound's cone; with the grid, cell by
   /// cell: each cell's disks across the segments whose direction falls into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
+  /// Adds the balls [first, last) as one group, with the cone of `bound` (a ball holding
+  /// them) when it is given: one cluster of a set, as add() with clusters adds it.
+  void add_run(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound) {
+    add_balls(first, last, self_heuristic, bound);
+  }
+  /// occludes() for the groups [first, last) alone (as groups() counts them; a head's span
+  /// must end within the range): a set's groups, added by one add().
+  bool occludes_groups(const Vertex& end, std::size_t first, std::size_t last, std::uint64_t& tests) const;
   /// Disks kept (padding not counted).
   std::size_t size() const { return count_; }
   /// Groups kept.
@@ -103,6 +114,58 @@ struct DiskPartition {
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
                                      const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,
                                      bool clusters = true);
+
+/// The instances' sphere sets, indexed once per render for PointDisks: which instances have
+/// one, how many with and without one share each mask bit, and, from `lazy_from` instances
+/// with a sphere set on, a tree over the boxes that hold the balls of each cluster of every
+/// instance (RenderWorld::occluder_clusters, the clusters that head none).
+class OccluderDiskIndex {
+ public:
+  OccluderDiskIndex(const RenderWorld& world, std::size_t instances, std::size_t lazy_from);
+  /// Whether points make an instance's disks only when a segment may meet its balls.
+  bool lazy() const { return lazy_; }
+
+ private:
+  friend class PointDisks;
+  const RenderWorld* world_;
+  std::size_t instances_ = 0;
+  bool lazy_ = false;
+  std::vector<std::uint8_t> has_spheres_;
+  std::array<std::uint32_t, 31> with_spheres_{}, without_spheres_{};  // instances per mask bit
+  unsigned with_bits_ = 0, without_bits_ = 0;
+  struct Run {
+    std::uint32_t instance, cluster;
+  };
+  std::vector<Run> runs_;  // the tree's items
+  BoxTree tree_;
+};
+
+/// A shading point's occluder disks and partition, as prepare_occluder_disks() gives them.
+/// With an index that is not lazy every disk is made at begin(). With a lazy one, begin()
+/// costs the same whatever the instances, and a cluster's disks are made the first time a
+/// segment from the point may meet its balls: the index's tree is searched with the
+/// segment lengthened, and the boxes grown, by 2^-8 of its length, which holds every
+/// segment the single-precision test can find hidden (it errs by under 1e-3 radians, for
+/// the smallest balls), so that the answers are those of every disk.
+class PointDisks {
+ public:
+  DiskPartition begin(const OccluderDiskIndex& index, const SurfaceHit& hit, const Vertex& position, bool trace_own,
+                      bool own_heuristic, std::size_t grid_from, bool clusters);
+  bool occludes(const Vertex& end, std::uint64_t& tests);
+  void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests);
+  /// Disks made so far (padding not counted).
+  std::size_t size() const { return disks_.size(); }
+
+ private:
+  const OccluderDiskIndex* index_ = nullptr;
+  OccluderDisks disks_;
+  Vertex x_ = Vertex::Zero();
+  int own_ = -1;
+  bool skip_own_ = false, own_heuristic_ = false, clusters_ = true;
+  std::uint32_t stamp_ = 0;
+  std::vector<std::uint32_t> made_;   // per run of the index: stamp_ once its disks are made
+  std::vector<std::uint32_t> group_;  // per run: its group in disks_, or none (all its balls behind the point)
+};
 
 /// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
 /// segment to w = (wx, wy, wz) at distance z = |w|: w . u_j > cos_j z (cos delta > cos
