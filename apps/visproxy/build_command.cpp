@@ -1,6 +1,7 @@
 // visproxy build MESH -o DIR [--proxy SPEC]... [--per-component] [--weld MODE] [--seed S]
-//                            [--tets tetgen|normals] [--gssa-lines N]
+//                            [--tets tetgen|normals] [--gssa-lines N] [--memory-limit GIB]
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -8,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,7 @@ struct BuildCommandOptions {
   Weld weld = Weld::automatic;
   std::uint64_t seed = 1;
   std::size_t hausdorff_samples = 20000;
+  double memory_limit_gib = 0;
   InnerTetrahedra tets = InnerTetrahedra::normals;
   std::size_t gssa_lines = 100000;
 };
@@ -115,12 +118,29 @@ void add_build_command(CLI::App& app, int& exit_code) {
                    "Isotropic lines for the GSSA ratio of sphere proxies [default: 100000]")
       ->check(CLI::Range(std::size_t{1000}, std::size_t{100'000'000}));
 
+  command
+      ->add_option("--memory-limit", options->memory_limit_gib,
+                   "Stop with exit code 3 and a line naming the builder or measure that ran out, rather than use more "
+                   "than this many GiB of data memory (the process's RLIMIT_DATA) [default: no limit]")
+      ->check(CLI::Range(0.001, 1.0e6));
+
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
+    if (options->memory_limit_gib > 0) {
+      const auto bytes = static_cast<rlim_t>(options->memory_limit_gib * 1024 * 1024 * 1024);
+      const rlimit limit{bytes, bytes};
+      if (::setrlimit(RLIMIT_DATA, &limit) != 0) throw CLI::ValidationError("--memory-limit", "cannot be set on this system");
+    }
     // Specs are checked before anything is read or built.
     const std::vector<ProxySpec> specs =
         options->proxies.empty() ? default_proxy_specs() : parse_proxy_specs(options->proxies);
-    const TriangleMesh mesh = read_mesh(options->mesh, {.weld = options->weld, .on_warning = print_warning});
+    const TriangleMesh mesh = [&] {
+      try {
+        return read_mesh(options->mesh, {.weld = options->weld, .on_warning = print_warning});
+      } catch (const std::bad_alloc&) {
+        throw OutOfMemoryError(options->mesh, "out of memory while reading it");
+      }
+    }();
     ManifestMesh described{.path = options->mesh,
                            .weld = options->weld == Weld::never ? "never" : options->weld == Weld::always ? "always" : "auto",
                            .vertices = mesh.positions.size(),

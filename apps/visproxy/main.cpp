@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/build_proxies.h"
 
 namespace visproxy::cli {
 
@@ -101,6 +102,9 @@ int main(int argc, char** argv) {
     if (error.get_exit_code() == 0) return app.exit(error);  // --help, --version
     std::cerr << "visproxy: " << error.what() << " (see 'visproxy --help')\n";
     return kBadInput;
+  } catch (const visproxy::OutOfMemoryError& error) {
+    std::cerr << "visproxy: " << error.what() << "\n";
+    return kInternalError;
   } catch (const visproxy::Error& error) {
     std::cerr << "visproxy: " << error.what() << "\n";
     return kBadInput;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <new>
 #include <cmath>
 #include <optional>
 
@@ -349,6 +350,8 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
         levels = build_sphere_levels(spec, inputs, options, diagonal, bounds);
       } catch (const InvalidInputError& error) {
         throw InvalidInputError(source, error.problem());
+      } catch (const std::bad_alloc&) {
+        throw OutOfMemoryError(source, spec.text + ": out of memory while building it");
       }
       for (BuiltProxy& proxy : levels) proxies.push_back(std::move(proxy));
       continue;
@@ -370,6 +373,9 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       } catch (const InvalidInputError& error) {
         const std::string where = options.per_component ? " (component " + std::to_string(c) + ")" : "";
         throw InvalidInputError(source, spec.text + where + ": " + error.problem());
+      } catch (const std::bad_alloc&) {
+        const std::string where = options.per_component ? " (component " + std::to_string(c) + ")" : "";
+        throw OutOfMemoryError(source, spec.text + where + ": out of memory while building it");
       }
       append_mesh(proxy.mesh, piece.mesh);
       proxy.boxes.insert(proxy.boxes.end(), piece.boxes.begin(), piece.boxes.end());
@@ -397,10 +403,16 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   // The measures once every builder is done, so that the mesh's ray scene and distance tree
   // are made once and are not held while a builder needs its own memory: the GSSA of the
   // sphere sets, then every proxy's error.
-  for (BuiltProxy& proxy : proxies)
-    if (proxy.primitive_type == PrimitiveType::sphere) measure_gssa(proxy);
-  reference.reset();
-  for (BuiltProxy& proxy : proxies) measure_error(proxy);
+  const BuiltProxy* measuring = nullptr;
+  try {
+    for (BuiltProxy& proxy : proxies)
+      if (proxy.primitive_type == PrimitiveType::sphere) measuring = &proxy, measure_gssa(proxy);
+    reference.reset();
+    for (BuiltProxy& proxy : proxies) measuring = &proxy, measure_error(proxy);
+  } catch (const std::bad_alloc&) {
+    throw OutOfMemoryError(source, (measuring ? measuring->spec.text : std::string("the proxies")) +
+                                       ": out of memory while measuring its error");
+  }
   return proxies;
 }
 

@@ -11,12 +11,21 @@
 #include <vector>
 
 #include "visproxy/mesh/sphere_set.h"
+#include "visproxy/core/errors.h"
 #include "visproxy/mesh/triangle_mesh.h"
 #include "visproxy/proxy/bounding_boxes.h"
 #include "visproxy/proxy/circumsphere_set.h"
 #include "visproxy/proxy/proxy_spec.h"
 
 namespace visproxy {
+
+/// A builder or a measure of build_proxies() ran out of memory (std::bad_alloc, or the
+/// limit the process was given). what() reads "FILE: SPEC: out of memory while ...",
+/// naming the builder or the measure; the CLI exits with code 3.
+class OutOfMemoryError : public Error {
+ public:
+  OutOfMemoryError(const std::filesystem::path& file, std::string_view problem) : Error(located_message(file, problem)) {}
+};
 
 enum class PrimitiveType { triangle, box, sphere };
 std::string_view primitive_type_name(PrimitiveType type);

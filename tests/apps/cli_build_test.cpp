@@ -221,5 +221,24 @@ TEST_F(CliBuild, InsideSpheresPassVisproxyVerifyUntilOneGrows) {
   EXPECT_LT(entry.at("verify").at("margin").get<double>(), 0.0);
 }
 
+// A builder that runs out of memory is named, with exit code 3 and no output folder. The
+// limit of 25 MiB lets the bunny be read and the box built, but not the alpha wrap (about
+// 36 MiB here; the bunny reads within 20). At 5 MiB the reading fails, and says so.
+TEST_F(CliBuild, BuilderOutOfMemoryIsNamedAndLeavesNoOutput) {
+  const std::string mesh = testing::cgal_mesh("bunny00.off").string();
+  const std::filesystem::path out = folder_ / "out";
+  const auto result = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
+                                            "' --proxy aabb --proxy wrap --memory-limit 0.025");
+  EXPECT_EQ(result.exit_code, 3) << result.err;
+  EXPECT_EQ(result.err, "visproxy: " + mesh + ": wrap: out of memory while building it\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto reading = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() + "' --proxy aabb --memory-limit 0.005");
+  EXPECT_EQ(reading.exit_code, 3) << reading.err;
+  EXPECT_EQ(reading.err, "visproxy: " + mesh + ": out of memory while reading it\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto roomy = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() + "' --proxy aabb --proxy wrap --memory-limit 8");
+  EXPECT_EQ(roomy.exit_code, 0) << roomy.err;
+}
+
 }  // namespace
 }  // namespace visproxy
