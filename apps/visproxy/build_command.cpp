@@ -1,10 +1,15 @@
 // visproxy build MESH -o DIR [--proxy SPEC]... [--per-component] [--weld MODE] [--seed S]
 //                            [--tets tetgen|normals] [--gssa-lines N] [--memory-limit GIB]
+//                            [--time-limit SECONDS]
 
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <cstdlib>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -22,6 +27,47 @@
 namespace visproxy::cli {
 namespace {
 
+// Once `seconds` have passed, prints one line naming the file and the step in progress
+// (reading, a builder, a measure) and ends the process with exit code 3, unless finish()
+// came first. Nothing is written before finish(), so nothing partial is left.
+class Watchdog {
+ public:
+  Watchdog(double seconds, std::filesystem::path file) : seconds_(seconds), file_(std::move(file)) {
+    if (seconds_ > 0) thread_ = std::thread([this] { watch(); });
+  }
+  ~Watchdog() {
+    finish();
+    if (thread_.joinable()) thread_.join();
+  }
+  void step(std::string what) {
+    const std::lock_guard lock(mutex_);
+    step_ = std::move(what);
+  }
+  void finish() {
+    {
+      const std::lock_guard lock(mutex_);
+      done_ = true;
+    }
+    changed_.notify_all();
+  }
+
+ private:
+  void watch() {
+    std::unique_lock lock(mutex_);
+    if (changed_.wait_for(lock, std::chrono::duration<double>(seconds_), [this] { return done_; })) return;
+    std::fprintf(stderr, "visproxy: %s: %s (--time-limit %g s)\n", file_.string().c_str(), step_.c_str(), seconds_);
+    std::fflush(stderr);
+    std::_Exit(3);
+  }
+  double seconds_;
+  std::filesystem::path file_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::string step_ = "out of time while reading it";
+  bool done_ = false;
+  std::thread thread_;
+};
+
 struct BuildCommandOptions {
   std::filesystem::path mesh;
   std::filesystem::path folder;
@@ -31,6 +77,7 @@ struct BuildCommandOptions {
   std::uint64_t seed = 1;
   std::size_t hausdorff_samples = 20000;
   double memory_limit_gib = 0;
+  double time_limit = 0;
   InnerTetrahedra tets = InnerTetrahedra::normals;
   std::size_t gssa_lines = 100000;
 };
@@ -124,6 +171,12 @@ void add_build_command(CLI::App& app, int& exit_code) {
                    "than this many GiB of data memory (the process's RLIMIT_DATA) [default: no limit]")
       ->check(CLI::Range(0.001, 1.0e6));
 
+  command
+      ->add_option("--time-limit", options->time_limit,
+                   "Stop with exit code 3 and a line naming the builder or measure in progress once this many seconds "
+                   "have passed, writing nothing [default: no limit]")
+      ->check(CLI::Range(0.001, 1.0e9));
+
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
     if (options->memory_limit_gib > 0) {
@@ -134,6 +187,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
     // Specs are checked before anything is read or built.
     const std::vector<ProxySpec> specs =
         options->proxies.empty() ? default_proxy_specs() : parse_proxy_specs(options->proxies);
+    Watchdog watchdog(options->time_limit, options->mesh);
     const TriangleMesh mesh = [&] {
       try {
         return read_mesh(options->mesh, {.weld = options->weld, .on_warning = print_warning});
@@ -157,9 +211,15 @@ void add_build_command(CLI::App& app, int& exit_code) {
                        .on_skip = [](std::string_view name, std::string_view reason) {
                          std::cerr << "visproxy build: skipping " << name << ": " << reason << "\n";
                        }};
-    if (::isatty(STDERR_FILENO))
-      build.on_start = [](std::string_view name) { std::cerr << "visproxy build: " << name << " ...\n"; };
+    const bool progress = ::isatty(STDERR_FILENO);
+    build.on_start = [&](std::string_view name) {
+      if (progress) std::cerr << "visproxy build: " << name << " ...\n";
+      for (const ProxySpec& spec : specs)
+        if (spec.name() == name) watchdog.step(spec.text + ": out of time while building it");
+    };
+    build.on_measure = [&](std::string_view spec) { watchdog.step(std::string(spec) + ": out of time while measuring its error"); };
     const std::vector<BuiltProxy> proxies = build_proxies(mesh, options->mesh, specs, build);
+    watchdog.finish();
     write_proxy_folder(options->folder, described, proxies, build);
     print_table(*options, described, proxies,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

@@ -406,9 +406,15 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   const BuiltProxy* measuring = nullptr;
   try {
     for (BuiltProxy& proxy : proxies)
-      if (proxy.primitive_type == PrimitiveType::sphere) measuring = &proxy, measure_gssa(proxy);
+      if (proxy.primitive_type == PrimitiveType::sphere) {
+        if (options.on_measure) options.on_measure(proxy.spec.text);
+        measuring = &proxy, measure_gssa(proxy);
+      }
     reference.reset();
-    for (BuiltProxy& proxy : proxies) measuring = &proxy, measure_error(proxy);
+    for (BuiltProxy& proxy : proxies) {
+      if (options.on_measure) options.on_measure(proxy.spec.text);
+      measuring = &proxy, measure_error(proxy);
+    }
   } catch (const std::bad_alloc&) {
     throw OutOfMemoryError(source, (measuring ? measuring->spec.text : std::string("the proxies")) +
                                        ": out of memory while measuring its error");

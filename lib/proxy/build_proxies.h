@@ -63,6 +63,9 @@ struct BuildOptions {
   /// reason) instead of failing: for the default set, which holds inside:40.
   bool skip_inside_unless_closed = false;
   std::function<void(std::string_view name, std::string_view reason)> on_skip = {};
+  /// Called before each proxy's error (and GSSA) is measured, with its spec's text, once
+  /// every proxy is built; may be empty.
+  std::function<void(std::string_view spec)> on_measure = {};
 };
 
 /// Builds every spec for `mesh`, in order (a spheres spec gives one proxy per level).

@@ -240,5 +240,26 @@ TEST_F(CliBuild, BuilderOutOfMemoryIsNamedAndLeavesNoOutput) {
   EXPECT_EQ(roomy.exit_code, 0) << roomy.err;
 }
 
+// A build past its time limit names the step in progress, exits 3 and writes nothing: the
+// bunny's outer:512 (about 1.5 s) under 0.5 s, and the error measure of a box over 10^7
+// samples (over a minute) under 1 s, after the box itself was built in milliseconds.
+TEST_F(CliBuild, BuildOutOfTimeNamesTheStepAndLeavesNoOutput) {
+  const std::string mesh = testing::cgal_mesh("bunny00.off").string();
+  const std::filesystem::path out = folder_ / "out";
+  const auto building = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
+                                              "' --proxy aabb --proxy outer:512 --time-limit 0.5");
+  EXPECT_EQ(building.exit_code, 3) << building.err;
+  EXPECT_EQ(building.err, "visproxy: " + mesh + ": outer:512: out of time while building it (--time-limit 0.5 s)\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto measuring = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
+                                               "' --proxy aabb --hausdorff-samples 10000000 --time-limit 1");
+  EXPECT_EQ(measuring.exit_code, 3) << measuring.err;
+  EXPECT_EQ(measuring.err, "visproxy: " + mesh + ": aabb: out of time while measuring its error (--time-limit 1 s)\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto in_time = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() + "' --proxy aabb --time-limit 600");
+  EXPECT_EQ(in_time.exit_code, 0) << in_time.err;
+  EXPECT_TRUE(std::filesystem::exists(out / "manifest.json"));
+}
+
 }  // namespace
 }  // namespace visproxy
