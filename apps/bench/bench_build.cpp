@@ -20,12 +20,8 @@
 // ran out of. Prints the table and the default set's sum of times and largest peak per
 // size, and writes PREFIX.csv and PREFIX.svg (seconds against triangles, log-log).
 
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -38,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "child_process.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
 #include "visproxy/evaluate/plot.h"
@@ -115,49 +112,17 @@ Run run_builder(const std::filesystem::path& file, std::size_t triangles, const 
   Run run;
   run.triangles = triangles;
   run.proxy = spec.name();
-  int pipe_ends[2];
-  if (::pipe(pipe_ends) != 0) throw Error(std::string("pipe: ") + std::strerror(errno));
-  std::fflush(nullptr);
-  const pid_t child = ::fork();
-  if (child < 0) throw Error(std::string("fork: ") + std::strerror(errno));
-  if (child == 0) {
-    ::close(pipe_ends[0]);
-    if (pipe_ends[1] != 3) ::dup2(pipe_ends[1], 3), ::close(pipe_ends[1]);
-    if (memory_limit_gib > 0) {
-      const rlim_t bytes = static_cast<rlim_t>(memory_limit_gib * 1024 * 1024 * 1024);
-      const rlimit limit{bytes, bytes};
-      ::setrlimit(RLIMIT_AS, &limit);
-    }
-    ::alarm(static_cast<unsigned>(time_limit));  // kept across exec
-    const std::string spec_text = spec.text, file_text = file.string();
-    const char* arguments[] = {"visproxy-bench-build", "--one", spec_text.c_str(), file_text.c_str(), nullptr};
-    ::execv("/proc/self/exe", const_cast<char* const*>(arguments));
-    ::_exit(127);
-  }
-  ::close(pipe_ends[1]);
   ChildReport report;
-  std::size_t got = 0;
-  while (got < sizeof report) {
-    const ssize_t n = ::read(pipe_ends[0], reinterpret_cast<char*>(&report) + got, sizeof report - got);
-    if (n <= 0) break;
-    got += static_cast<std::size_t>(n);
-  }
-  ::close(pipe_ends[0]);
-  int status = 0;
-  rusage usage{};
-  ::wait4(child, &status, 0, &usage);
-  run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
-  if (got == sizeof report) run.read_mb = report.read_mb;
-  if (got == sizeof report && report.ok) {
+  const bench::ChildRun child = bench::run_self({"visproxy-bench-build", "--one", spec.text, file.string()}, &report,
+                                                sizeof report, time_limit, memory_limit_gib);
+  run.peak_mb = child.peak_mb;
+  if (child.reported) run.read_mb = report.read_mb;
+  if (child.reported && report.ok) {
     run.primitives = report.primitives, run.seconds = report.seconds;
-  } else if (got == sizeof report) {
+  } else if (child.reported) {
     run.status = report.message;
-  } else if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM) {
-    run.status = "out of time (" + std::to_string(time_limit) + " s)";
-  } else if (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) {
-    run.status = "killed (out of memory?)";
   } else {
-    run.status = "crashed: " + std::string(WIFSIGNALED(status) ? strsignal(WTERMSIG(status)) : "no report");
+    run.status = bench::child_failure(child, time_limit);
   }
   return run;
 }

@@ -13,12 +13,9 @@
 // bit (hashes of the pixels). The stochastic modes use the proxy named by --proxy of each
 // row, as `visproxy render --proxy` does.
 
-#include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -28,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "child_process.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
 #include "visproxy/evaluate/scene_proxies.h"
@@ -121,38 +119,14 @@ struct Run {
 };
 
 Run run_child(const std::string& scene, std::size_t mode, const Settings& s) {
-  int pipe_ends[2];
-  if (::pipe(pipe_ends) != 0) throw Error(std::string("pipe: ") + std::strerror(errno));
-  std::fflush(nullptr);
-  const pid_t child = ::fork();
-  if (child < 0) throw Error(std::string("fork: ") + std::strerror(errno));
-  if (child == 0) {
-    ::close(pipe_ends[0]);
-    if (pipe_ends[1] != 3) ::dup2(pipe_ends[1], 3), ::close(pipe_ends[1]);
-    const std::vector<std::string> texts = {"visproxy-bench-forest", "--one", scene, std::to_string(mode),
-                                            std::to_string(s.width), std::to_string(s.height), std::to_string(s.spp),
-                                            std::to_string(s.shadow_rays), std::to_string(s.vpls), std::to_string(s.seed)};
-    std::vector<const char*> arguments;
-    for (const std::string& text : texts) arguments.push_back(text.c_str());
-    arguments.push_back(nullptr);
-    ::execv("/proc/self/exe", const_cast<char* const*>(arguments.data()));
-    ::_exit(127);
-  }
-  ::close(pipe_ends[1]);
   Run run;
-  std::size_t got = 0;
-  while (got < sizeof run.report) {
-    const ssize_t n = ::read(pipe_ends[0], reinterpret_cast<char*>(&run.report) + got, sizeof run.report - got);
-    if (n <= 0) break;
-    got += static_cast<std::size_t>(n);
-  }
-  ::close(pipe_ends[0]);
-  int status = 0;
-  rusage usage{};
-  ::wait4(child, &status, 0, &usage);
-  run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
-  if (got != sizeof run.report)
-    run.status = "crashed: " + std::string(WIFSIGNALED(status) ? strsignal(WTERMSIG(status)) : "no report");
+  const bench::ChildRun child = bench::run_self(
+      {"visproxy-bench-forest", "--one", scene, std::to_string(mode), std::to_string(s.width), std::to_string(s.height),
+       std::to_string(s.spp), std::to_string(s.shadow_rays), std::to_string(s.vpls), std::to_string(s.seed)},
+      &run.report, sizeof run.report);
+  run.peak_mb = child.peak_mb;
+  if (!child.reported)
+    run.status = bench::child_failure(child, 0);
   else if (!run.report.ok)
     run.status = run.report.message;
   return run;
