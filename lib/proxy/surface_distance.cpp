@@ -14,9 +14,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Simple_cartesian.h>
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <random>
 #include <string>
@@ -70,6 +71,28 @@ bool exactly_collinear(const Vertex& a, const Vertex& b, const Vertex& c) {
 // standard, unlike the standard distributions).
 double uniform(std::mt19937_64& random) { return static_cast<double>(random() >> 11) * 0x1.0p-53; }
 
+// A traversal of the tree that stops at the first triangle nearer than
+// sqrt(squared_radius) to the query point.
+struct WithinTraversal {
+  const TriangleMesh* mesh;
+  double squared_radius;
+  bool found = false;
+  bool go_further() const { return !found; }
+  void intersection(const Point& query, const Primitive& primitive) {
+    if (CGAL::squared_distance(query, get(TriangleOfMesh{mesh}, primitive.id())) < squared_radius) found = true;
+  }
+  template <typename Node>
+  bool do_intersect(const Point& query, const Node& node) const {
+    const CGAL::Bbox_3& box = node.bbox();
+    double squared = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double gap = std::max({box.min(k) - query[k], query[k] - box.max(k), 0.0});
+      squared += gap * gap;
+    }
+    return squared < squared_radius;
+  }
+};
+
 }  // namespace
 
 // The parts of a mesh that are measured: its used vertices and its triangles of non-zero
@@ -105,24 +128,53 @@ struct MeasuredSurface::Impl {
     return samples;
   }
 
-  // The largest distance from the points to the surface, in parallel (a maximum: the same
-  // whatever the split).
+  // Whether some triangle lies closer than sqrt(squared_radius) to q (a traversal that
+  // stops at the first one).
+  bool within(const Point& q, double squared_radius) const {
+    WithinTraversal traversal{mesh, squared_radius};
+    tree.traversal(q, traversal);
+    return traversal.found;
+  }
+
+  // The largest distance from the points to the surface, at least sqrt(squared_floor), in
+  // parallel. A point with a triangle nearer than the largest distance found so far minus
+  // `noise` (far above the rounding of the distance computations) cannot be the farthest
+  // and is not measured exactly, so the result is that of measuring every point, whatever
+  // the split and the order.
   template <class Get>
-  double farthest(std::size_t count, const Get& get) const {
-    const double largest = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count, 1024), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& range, double best) {
-          for (std::size_t i = range.begin(); i != range.end(); ++i) best = std::max(best, tree.squared_distance(get(i)));
-          return best;
-        },
-        [](double a, double b) { return std::max(a, b); });
-    return std::sqrt(largest);
+  double farthest(std::size_t count, const Get& get, double squared_floor, double noise, bool prune) const {
+    auto raise = [](std::atomic<double>& to, double value) {
+      for (double seen = to.load(); value > seen && !to.compare_exchange_weak(seen, value);) {
+      }
+    };
+    std::atomic<double> largest{squared_floor};
+    // Every 64th point first, so that the bound prunes from the start.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (count + 63) / 64, 16), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t j = range.begin(); j != range.end(); ++j) raise(largest, tree.squared_distance(get(64 * j)));
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        if (i % 64 == 0) continue;
+        const Point q = get(i);
+        const double reach = std::sqrt(largest.load()) - noise;
+        if (prune && reach > 0 && within(q, reach * reach)) continue;
+        raise(largest, tree.squared_distance(q));
+      }
+    });
+    return std::sqrt(largest.load());
   }
-  double farthest(const std::vector<Point>& points) const {
-    return farthest(points.size(), [&](std::size_t i) { return points[i]; });
+  double farthest(const std::vector<Point>& points, double floor, double noise, bool prune) const {
+    return farthest(points.size(), [&](std::size_t i) { return points[i]; }, floor * floor, noise, prune);
   }
-  double farthest_vertex(const Impl& from) const {
-    return farthest(from.vertices.size(), [&](std::size_t i) { return point(from.mesh->positions[from.vertices[i]]); });
+  double farthest_vertex(const Impl& from, double noise, bool prune) const {
+    return farthest(from.vertices.size(), [&](std::size_t i) { return point(from.mesh->positions[from.vertices[i]]); },
+                    0.0, noise, prune);
+  }
+  // The largest absolute coordinate of the used vertices.
+  double magnitude() const {
+    double largest = 0;
+    for (const VertexIndex v : vertices) largest = std::max(largest, mesh->positions[v].cwiseAbs().maxCoeff());
+    return largest;
   }
 };
 
@@ -170,11 +222,16 @@ namespace {
 SurfaceDistance hausdorff(const MeasuredSurface::Impl& from_a, const MeasuredSurface::Impl& from_b,
                           const SurfaceDistanceOptions& options) {
   std::mt19937_64 random(options.seed);
+  // The pruning margin: 2^-36 of the coordinates' magnitude, thousands of times the
+  // rounding of a point-triangle distance.
+  const double noise = 0x1.0p-36 * std::max({from_a.magnitude(), from_b.magnitude(), 1e-300});
   SurfaceDistance distance;
+  const std::vector<Point> samples_a = from_a.sample(options.samples_per_mesh, random);
   distance.a_to_b_world =
-      std::max(from_b.farthest_vertex(from_a), from_b.farthest(from_a.sample(options.samples_per_mesh, random)));
+      from_b.farthest(samples_a, from_b.farthest_vertex(from_a, noise, options.prune), noise, options.prune);
+  const std::vector<Point> samples_b = from_b.sample(options.samples_per_mesh, random);
   distance.b_to_a_world =
-      std::max(from_a.farthest_vertex(from_b), from_a.farthest(from_b.sample(options.samples_per_mesh, random)));
+      from_a.farthest(samples_b, from_a.farthest_vertex(from_b, noise, options.prune), noise, options.prune);
   return distance;
 }
 

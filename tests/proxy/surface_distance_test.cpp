@@ -5,9 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
+
+#include <tbb/task_arena.h>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/convex_hull.h"
 #include "proxy_test_support.h"
 #include "test_meshes.h"
 
@@ -89,6 +93,41 @@ TEST(SurfaceDistance, DegenerateTrianglesAreNotMeasuredTo) {
   const SurfaceDistance distance = sampled_hausdorff_distance(a, testing::single_triangle());
   EXPECT_NEAR(distance.a_to_b_world, 2.0, 1e-12);
   EXPECT_NEAR(distance.b_to_a_world, 0.0, 1e-12);
+}
+
+// Pruning skips the exact distance of points a nearer triangle rules out: the result must
+// be that of measuring every point, bit for bit, on one thread or many. The pairs include
+// two copies of one surface far from the origin, where every distance is rounding noise
+// and a margin too small for it would let the order of the threads decide the maximum.
+TEST(SurfaceDistance, PruningGivesTheDistanceOfMeasuringEveryPoint) {
+  const TriangleMesh bunny = read_mesh(testing::cgal_mesh("bunny00.off"));
+  const TriangleMesh knot = read_mesh(testing::cgal_mesh("knot1.off"));
+  const Vertex far(3.0e5, -1.0e5, 7.0e4);
+  struct Pair {
+    const char* name;
+    TriangleMesh a, b;
+  };
+  const std::vector<Pair> pairs = {
+      {"bunny, its hull", bunny, build_convex_hull(bunny).mesh},
+      {"bunny, its copy far from the origin", transformed(bunny, 1.0, Vertex::Zero(), far),
+       transformed(bunny, 1.0, Vertex::Zero(), far)},
+      {"bunny, shrunk far from the origin", transformed(bunny, 1.0, Vertex::Zero(), far),
+       transformed(bunny, 0.97, Vertex(0, 0.1, 0), far)},
+      {"knot, a cube", knot, testing::unit_cube()},
+  };
+  for (const Pair& pair : pairs) {
+    SCOPED_TRACE(pair.name);
+    const SurfaceDistanceOptions every{.samples_per_mesh = 5000, .seed = 3, .prune = false};
+    const SurfaceDistanceOptions pruned{.samples_per_mesh = 5000, .seed = 3, .prune = true};
+    const SurfaceDistance reference = sampled_hausdorff_distance(pair.a, pair.b, every);
+    for (const int threads : {1, 2, 5}) {
+      SCOPED_TRACE(threads);
+      tbb::task_arena arena(threads);
+      const SurfaceDistance distance = arena.execute([&] { return sampled_hausdorff_distance(pair.a, pair.b, pruned); });
+      EXPECT_EQ(distance.a_to_b_world, reference.a_to_b_world);
+      EXPECT_EQ(distance.b_to_a_world, reference.b_to_a_world);
+    }
+  }
 }
 
 TEST(SurfaceDistance, RejectsMeshesWithoutArea) {
