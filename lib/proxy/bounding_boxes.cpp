@@ -8,10 +8,13 @@
 #include <CGAL/optimal_bounding_box.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <numbers>
+#include <string_view>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -204,6 +207,52 @@ bool holds_every_point(const TriangleMesh& box, const std::vector<Vertex>& point
       [](bool a, bool b) { return a && b; });
 }
 
+// A pattern search from `axes`: rotations about each box axis by +-step, from 2 degrees
+// halved down to about 0.004 degrees, taking every rotation that shrinks the box fitted to
+// `points`. Never larger than the box it starts from.
+Eigen::Matrix3d refine_axes(const std::vector<Vertex>& points, Eigen::Matrix3d axes, bool flat) {
+  double best = box_size(fit_box(points, axes), flat);
+  for (double step = 2.0 * std::numbers::pi / 180; step > 7e-5; step *= 0.5) {
+    for (bool improved = true; improved;) {
+      improved = false;
+      for (int k = 0; k < 3; ++k)
+        for (const double angle : {step, -step}) {
+          const Eigen::Matrix3d turned = orthonormal(axes * Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(k)).toRotationMatrix());
+          const double size = box_size(fit_box(points, turned), flat);
+          if (size < best) best = size, axes = turned, improved = true;
+        }
+    }
+  }
+  return axes;
+}
+
+// The indices of the points extreme along `directions` directions spread evenly over the
+// sphere (a Fibonacci lattice), in increasing order; every index when `directions` is 0 or
+// there are no more points than directions. The box's extent along an axis is the
+// support function of the points there, and the extreme points' support function differs
+// from it by at most the diameter times 1 - cos of the lattice's spacing.
+std::vector<std::size_t> extreme_corners(const std::vector<Vertex>& points, std::size_t directions) {
+  std::vector<std::size_t> chosen;
+  if (directions == 0 || points.size() <= directions) {
+    for (std::size_t i = 0; i < points.size(); ++i) chosen.push_back(i);
+    return chosen;
+  }
+  const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (std::size_t d = 0; d < directions; ++d) {
+    const double z = 1.0 - (2.0 * static_cast<double>(d) + 1.0) / static_cast<double>(directions);
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = golden_angle * static_cast<double>(d);
+    const Vertex u(r * std::cos(phi), r * std::sin(phi), z);
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < points.size(); ++i)
+      if (u.dot(points[i]) > u.dot(points[best])) best = i;
+    chosen.push_back(best);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  return chosen;
+}
+
 }  // namespace
 
 OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBoxOptions& options) {
@@ -232,8 +281,7 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
     // parallel for large meshes); the proof below still takes every vertex.
     corners = build_convex_hull(mesh).mesh.positions;
     std::vector<Point> cgal_points;
-    cgal_points.reserve(corners.size());
-    for (const Vertex& p : corners) cgal_points.push_back(to_point(p));
+    for (const std::size_t i : extreme_corners(corners, options.search_directions)) cgal_points.push_back(to_point(corners[i]));
     Kernel::Aff_transformation_3 rotation;
     CGAL::oriented_bounding_box(cgal_points, rotation,
                                 CGAL::parameters::random_seed(options.seed).use_convex_hull(false));
@@ -254,7 +302,8 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
   OrientedBoxResult result;
   double best = std::numeric_limits<double>::infinity();
   for (const Candidate& candidate : candidates) {
-    const OrientedBox box = fit_box(corners, candidate.axes);
+    const bool refine = !flat && candidate.name != std::string_view("axis-aligned");
+    const OrientedBox box = fit_box(corners, refine ? refine_axes(corners, candidate.axes, flat) : candidate.axes);
     if (box_size(box, flat) < best) {
       best = box_size(box, flat);
       result.box = box;

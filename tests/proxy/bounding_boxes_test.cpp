@@ -6,9 +6,12 @@
 #include <cmath>
 #include <numbers>
 
+#include <Eigen/Geometry>
+
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
 #include "test_meshes.h"
 #include "test_support.h"
 #include "visproxy/verify/containment.h"
@@ -83,6 +86,25 @@ TEST_P(RealMeshBoxes, ContainEveryVertexAndObbIsNoLargerThanAabb) {
   EXPECT_TRUE(contains_every_vertex(obb.mesh, mesh));
   const BoundingBox bounds = bounding_box(mesh);
   EXPECT_LE(obb.box.volume(), (bounds.max - bounds.min).prod() * (1 + 1e-12));
+  // Searching over the corners extreme along 512 directions, then refining, loses at most
+  // 0.2 % of volume against searching over every hull corner (0.05 % at most measured).
+  const OrientedBoxResult every = build_oriented_box(mesh, {.seed = 1, .search_directions = 0});
+  EXPECT_LE(obb.box.volume(), every.box.volume() * 1.002);
+}
+
+// An ellipsoid of 2562 vertices (more hull corners than search directions), with semi-axes
+// 3, 1.5 and 0.5 turned about a skew axis and moved 10^6 from the origin: the box along its
+// axes, of volume at most 8 x 3 x 1.5 x 0.5 = 18, must be found, and hold every vertex.
+TEST(OrientedBox, FindsATurnedEllipsoidsAxesFarFromTheOrigin) {
+  TriangleMesh ellipsoid = sphere_set_mesh({Sphere{Vertex::Zero(), 1.0}}, 4);
+  ASSERT_GT(ellipsoid.positions.size(), 2000u);
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized()).toRotationMatrix();
+  for (Vertex& p : ellipsoid.positions) p = turn * Vertex(3 * p.x(), 1.5 * p.y(), 0.5 * p.z()) + Vertex(1e6, -2e6, 5e5);
+  const OrientedBoxResult obb = build_oriented_box(ellipsoid);
+  EXPECT_TRUE(contains_every_vertex(obb.mesh, ellipsoid));
+  EXPECT_LE(obb.box.volume(), 18 * 1.001) << obb.axes_from;
+  const BoundingBox bounds = bounding_box(ellipsoid);
+  EXPECT_LT(obb.box.volume(), 0.5 * (bounds.max - bounds.min).prod());
 }
 
 TEST(OrientedBox, SameSeedSameBoxBitForBit) {
