@@ -27,9 +27,10 @@
 namespace visproxy::cli {
 namespace {
 
-// Once `seconds` have passed, prints one line naming the file and the step in progress
-// (reading, a builder, a measure) and ends the process with exit code 3, unless finish()
-// came first. Nothing is written before finish(), so nothing partial is left.
+// Once `seconds` have passed, prints one line naming the file and every step in progress
+// (reading, builders, measures: several when builders run at once) and ends the process
+// with exit code 3, unless finish() came first. Nothing is written before finish(), so
+// nothing partial is left.
 class Watchdog {
  public:
   Watchdog(double seconds, std::filesystem::path file) : seconds_(seconds), file_(std::move(file)) {
@@ -39,9 +40,14 @@ class Watchdog {
     finish();
     if (thread_.joinable()) thread_.join();
   }
-  void step(std::string what) {
+  /// The step `key` (a spec's text, or "" for reading) is now `what`.
+  void step(const std::string& key, std::string what) {
     const std::lock_guard lock(mutex_);
-    step_ = std::move(what);
+    steps_[key] = std::move(what);
+  }
+  void done(const std::string& key) {
+    const std::lock_guard lock(mutex_);
+    steps_.erase(key);
   }
   void finish() {
     {
@@ -55,7 +61,10 @@ class Watchdog {
   void watch() {
     std::unique_lock lock(mutex_);
     if (changed_.wait_for(lock, std::chrono::duration<double>(seconds_), [this] { return done_; })) return;
-    std::fprintf(stderr, "visproxy: %s: %s (--time-limit %g s)\n", file_.string().c_str(), step_.c_str(), seconds_);
+    std::string steps;
+    for (const auto& [key, what] : steps_) steps += (steps.empty() ? "" : "; ") + what;
+    if (steps.empty()) steps = "out of time";
+    std::fprintf(stderr, "visproxy: %s: %s (--time-limit %g s)\n", file_.string().c_str(), steps.c_str(), seconds_);
     std::fflush(stderr);
     std::_Exit(3);
   }
@@ -63,7 +72,7 @@ class Watchdog {
   std::filesystem::path file_;
   std::mutex mutex_;
   std::condition_variable changed_;
-  std::string step_ = "out of time while reading it";
+  std::map<std::string, std::string> steps_{{"", "out of time while reading it"}};
   bool done_ = false;
   std::thread thread_;
 };
@@ -78,6 +87,7 @@ struct BuildCommandOptions {
   std::size_t hausdorff_samples = 20000;
   double memory_limit_gib = 0;
   double time_limit = 0;
+  std::size_t builders_at_once = 0;
   InnerTetrahedra tets = InnerTetrahedra::normals;
   std::size_t gssa_lines = 100000;
 };
@@ -110,8 +120,10 @@ void print_table(const BuildCommandOptions& options, const ManifestMesh& mesh, c
                 (options.folder / (proxy.name + (spheres ? ".json" : ".ply"))).string().c_str(), gssa.c_str());
   }
   std::printf("Hausdorff %%: sampled two-sided Hausdorff distance between proxy and mesh, in %% of the bounding-box\n"
-              "diagonal (%zu samples per surface, seed %llu). Manifest: %s (%.2f s in all)\n",
+              "diagonal (%zu samples per surface, seed %llu). Build s: wall seconds of each builder, %zu built at "
+              "once. Manifest: %s (%.2f s in all)\n",
               options.hausdorff_samples, static_cast<unsigned long long>(options.seed),
+              builders_at_once(options.builders_at_once, mesh.triangles),
               (options.folder / "manifest.json").string().c_str(), total_seconds);
   if (any_spheres)
     std::printf("GSSA ratio: isotropic lines hitting the spheres / lines hitting the mesh (%zu lines, seed %llu, 95 %% "
@@ -166,6 +178,12 @@ void add_build_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(std::size_t{1000}, std::size_t{100'000'000}));
 
   command
+      ->add_option("--builders-at-once", options->builders_at_once,
+                   "Proxies built and measured at once, each on its own worker; the proxies are the same bit for bit, "
+                   "the build seconds grow as builders share the cores, and so does the peak memory [default: the "
+                   "machine's threads for meshes up to 2^20 triangles, 1 above]")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{256}));
+  command
       ->add_option("--memory-limit", options->memory_limit_gib,
                    "Stop with exit code 3 and a line naming the builder or measure that ran out, rather than use more "
                    "than this many GiB of data memory (the process's RLIMIT_DATA) [default: no limit]")
@@ -211,13 +229,22 @@ void add_build_command(CLI::App& app, int& exit_code) {
                        .on_skip = [](std::string_view name, std::string_view reason) {
                          std::cerr << "visproxy build: skipping " << name << ": " << reason << "\n";
                        }};
+    watchdog.done("");
+    build.builders_at_once = options->builders_at_once;
     const bool progress = ::isatty(STDERR_FILENO);
+    std::mutex progress_mutex;
     build.on_start = [&](std::string_view name) {
-      if (progress) std::cerr << "visproxy build: " << name << " ...\n";
+      if (progress) {
+        const std::lock_guard lock(progress_mutex);
+        std::cerr << "visproxy build: " << name << " ...\n";
+      }
       for (const ProxySpec& spec : specs)
-        if (spec.name() == name) watchdog.step(spec.text + ": out of time while building it");
+        if (spec.name() == name) watchdog.step(spec.text, spec.text + ": out of time while building it");
     };
-    build.on_measure = [&](std::string_view spec) { watchdog.step(std::string(spec) + ": out of time while measuring its error"); };
+    build.on_measure = [&](std::string_view spec) {
+      watchdog.step(std::string(spec), std::string(spec) + ": out of time while measuring its error");
+    };
+    build.on_step_done = [&](std::string_view spec) { watchdog.done(std::string(spec)); };
     const std::vector<BuiltProxy> proxies = build_proxies(mesh, options->mesh, specs, build);
     watchdog.finish();
     write_proxy_folder(options->folder, described, proxies, build);

@@ -1,10 +1,16 @@
 #include "visproxy/proxy/build_proxies.h"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
 #include <chrono>
 #include <new>
 #include <cmath>
 #include <optional>
+
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/inspect/mesh_report.h"
@@ -267,6 +273,25 @@ std::vector<BuiltProxy> build_sphere_levels(const ProxySpec& spec, const std::ve
   return proxies;
 }
 
+// Rough order of the builders' cost on one mesh, slowest first: workers that take the
+// slow ones first finish together.
+int expected_cost_rank(ProxyMethod method) {
+  switch (method) {
+    case ProxyMethod::outer_hull:
+    case ProxyMethod::inner_hull: return 0;
+    case ProxyMethod::alpha_wrap:
+    case ProxyMethod::sphere_set:
+    case ProxyMethod::inscribed_spheres: return 1;
+    case ProxyMethod::obb:
+    case ProxyMethod::bounded_hull: return 2;
+    case ProxyMethod::quadric:
+    case ProxyMethod::convex_hull: return 3;
+    case ProxyMethod::clustering:
+    case ProxyMethod::aabb: return 4;
+  }
+  return 4;
+}
+
 }  // namespace
 
 std::string_view primitive_type_name(PrimitiveType type) {
@@ -276,6 +301,12 @@ std::string_view primitive_type_name(PrimitiveType type) {
     case PrimitiveType::sphere: return "sphere";
   }
   return "triangle";
+}
+
+std::size_t builders_at_once(std::size_t requested, std::size_t triangles) {
+  if (requested != 0) return requested;
+  if (triangles > kConcurrentBuildTriangles) return 1;
+  return std::max<std::size_t>(1, static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
 }
 
 std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::filesystem::path& source,
@@ -292,14 +323,17 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       pointers.push_back(&mesh);
     return pointers;
   }();
+  const std::size_t at_once = std::min(builders_at_once(options.builders_at_once, mesh.triangles.size()),
+                                       std::max<std::size_t>(1, specs.size()));
 
   // Sampled Hausdorff distance between the proxy's triangles and the mesh; sphere proxies
   // are measured through the boundary of their union (level-2 icospheres, without the
   // triangles buried in other balls: within 1.3 % of each radius).
-  // The mesh's side is prepared once, for every proxy (after the builders: see below).
+  // The mesh's side is prepared once, for every proxy, when the first measure needs it.
   std::optional<MeasuredSurface> measured_mesh;
+  std::once_flag measured_mesh_made;
   auto measure_error = [&](BuiltProxy& proxy) {
-    if (!measured_mesh) measured_mesh.emplace(mesh, "second");
+    std::call_once(measured_mesh_made, [&] { measured_mesh.emplace(mesh, "second"); });
     const SurfaceDistance distance = sampled_hausdorff_distance(
         proxy.primitive_type == PrimitiveType::sphere ? sphere_union_boundary_mesh(proxy.spheres, 2) : proxy.mesh,
         *measured_mesh, {.samples_per_mesh = options.hausdorff_samples, .seed = options.seed});
@@ -312,12 +346,13 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   };
   // Isotropic lines against the mesh, traced once for every sphere proxy.
   std::optional<ReferenceRays> reference;
+  std::once_flag reference_made;
   auto measure_gssa = [&](BuiltProxy& proxy) {
-    if (!reference) {
+    std::call_once(reference_made, [&] {
       const RayScene scene(mesh, bounding_sphere(mesh).center);
       reference = trace_reference(scene, isotropic_lines(bounding_sphere(mesh), options.gssa_lines, options.seed),
                                   {.rays = 0, .repeats = 0});
-    }
+    });
     const RayScene spheres(proxy.spheres, bounding_sphere(mesh).center);
     const std::vector<std::uint8_t> blocked = spheres.segments_blocked(reference->rays);
     RayTypeCounts counts;
@@ -334,27 +369,25 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
     if (proxy.spec.kind() == ProxyKind::inside) proxy.result["lines_hitting_spheres_not_mesh"] = counts.counts[2];
   };
 
-  std::vector<BuiltProxy> proxies;
-  for (const ProxySpec& spec : specs) {
+  // The proxies of one spec (a spheres spec gives one per level; none when inside:N is
+  // skipped), without their measures.
+  auto build_spec = [&](const ProxySpec& spec) -> std::vector<BuiltProxy> {
     if (spec.method == ProxyMethod::inscribed_spheres || spec.method == ProxyMethod::sphere_set) {
       if (options.on_start) options.on_start(spec.name());
       if (spec.method == ProxyMethod::inscribed_spheres && options.skip_inside_unless_closed) {
         if (const std::optional<std::string> defects = closed_defects(mesh)) {
           if (options.on_skip)
             options.on_skip(spec.name(), "the mesh is not closed (" + *defects + "): an inside proxy needs a closed mesh");
-          continue;
+          return {};
         }
       }
-      std::vector<BuiltProxy> levels;
       try {
-        levels = build_sphere_levels(spec, inputs, options, diagonal, bounds);
+        return build_sphere_levels(spec, inputs, options, diagonal, bounds);
       } catch (const InvalidInputError& error) {
         throw InvalidInputError(source, error.problem());
       } catch (const std::bad_alloc&) {
         throw OutOfMemoryError(source, spec.text + ": out of memory while building it");
       }
-      for (BuiltProxy& proxy : levels) proxies.push_back(std::move(proxy));
-      continue;
     }
     if (options.on_start) options.on_start(spec.name());
     BuiltProxy proxy;
@@ -398,27 +431,83 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
       for (const OrientedBox& box : proxy.boxes) boxes.push_back(box_json(box));
       proxy.result["boxes"] = boxes;
     }
-    proxies.push_back(std::move(proxy));
-  }
-  // The measures once every builder is done, so that the mesh's ray scene and distance tree
-  // are made once and are not held while a builder needs its own memory: the GSSA of the
-  // sphere sets, then every proxy's error.
-  const BuiltProxy* measuring = nullptr;
-  try {
-    for (BuiltProxy& proxy : proxies)
-      if (proxy.primitive_type == PrimitiveType::sphere) {
+    std::vector<BuiltProxy> built;
+    built.push_back(std::move(proxy));
+    return built;
+  };
+  // A spec's measures: the GSSA of a sphere set, then every proxy's error.
+  auto measure_spec = [&](std::vector<BuiltProxy>& built) {
+    const BuiltProxy* measuring = nullptr;
+    try {
+      for (BuiltProxy& proxy : built)
+        if (proxy.primitive_type == PrimitiveType::sphere) {
+          if (options.on_measure) options.on_measure(proxy.spec.text);
+          measuring = &proxy, measure_gssa(proxy);
+        }
+      for (BuiltProxy& proxy : built) {
         if (options.on_measure) options.on_measure(proxy.spec.text);
-        measuring = &proxy, measure_gssa(proxy);
+        measuring = &proxy, measure_error(proxy);
       }
-    reference.reset();
-    for (BuiltProxy& proxy : proxies) {
-      if (options.on_measure) options.on_measure(proxy.spec.text);
-      measuring = &proxy, measure_error(proxy);
+    } catch (const std::bad_alloc&) {
+      throw OutOfMemoryError(source, (measuring ? measuring->spec.text : std::string("the proxies")) +
+                                         ": out of memory while measuring its error");
     }
-  } catch (const std::bad_alloc&) {
-    throw OutOfMemoryError(source, (measuring ? measuring->spec.text : std::string("the proxies")) +
-                                       ": out of memory while measuring its error");
+  };
+
+  std::vector<std::vector<BuiltProxy>> built(specs.size());
+  if (at_once == 1) {
+    // One after another, the measures once every builder is done, so that the mesh's ray
+    // scene and distance tree are made once and are not held while a builder needs its
+    // own memory.
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      built[i] = build_spec(specs[i]);
+      if (options.on_step_done) options.on_step_done(specs[i].text);
+    }
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      measure_spec(built[i]);
+      if (options.on_step_done) options.on_step_done(specs[i].text);
+    }
+    reference.reset();
+  } else {
+    // `at_once` workers take the specs, slowest kinds first, and measure each proxy as soon
+    // as it is built. Every builder and measure is deterministic on its own, so the
+    // proxies are those of one-after-another, bit for bit. The first error in spec order
+    // is the one thrown, as one after another would.
+    std::vector<std::size_t> order(specs.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return expected_cost_rank(specs[a].method) < expected_cost_rank(specs[b].method);
+    });
+    // After a failure only the specs before it still run, so that the error thrown is
+    // the first in spec order whatever the timing.
+    std::vector<std::exception_ptr> errors(specs.size());
+    std::atomic<std::size_t> next{0};
+    std::atomic<std::size_t> first_failed{specs.size()};
+    tbb::task_group workers;
+    for (std::size_t w = 0; w < at_once; ++w)
+      workers.run([&] {
+        for (std::size_t k = next++; k < order.size(); k = next++) {
+          const std::size_t i = order[k];
+          if (i > first_failed) continue;
+          try {
+            built[i] = build_spec(specs[i]);
+            measure_spec(built[i]);
+            if (options.on_step_done) options.on_step_done(specs[i].text);
+          } catch (...) {
+            errors[i] = std::current_exception();
+            std::size_t seen = first_failed;
+            while (i < seen && !first_failed.compare_exchange_weak(seen, i)) {
+            }
+          }
+        }
+      });
+    workers.wait();
+    for (const std::exception_ptr& error : errors)
+      if (error) std::rethrow_exception(error);
   }
+  std::vector<BuiltProxy> proxies;
+  for (std::vector<BuiltProxy>& levels : built)
+    for (BuiltProxy& proxy : levels) proxies.push_back(std::move(proxy));
   return proxies;
 }
 

@@ -71,6 +71,7 @@ json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh&
         {"hausdorff_samples", options.hausdorff_samples},
         {"tets", inner_tetrahedra_name(options.tets)},
         {"gssa_lines", options.gssa_lines},
+        {"builders_at_once", builders_at_once(options.builders_at_once, mesh.triangles)},
         {"seed", options.seed}}},
       {"proxies", entries}};
   write_file_atomically(folder / "manifest.json", manifest.dump(2) + "\n");

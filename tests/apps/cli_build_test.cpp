@@ -223,12 +223,13 @@ TEST_F(CliBuild, InsideSpheresPassVisproxyVerifyUntilOneGrows) {
 
 // A builder that runs out of memory is named, with exit code 3 and no output folder. The
 // limit of 25 MiB lets the bunny be read and the box built, but not the alpha wrap (about
-// 36 MiB here; the bunny reads within 20). At 5 MiB the reading fails, and says so.
+// 36 MiB here; the bunny reads within 20). At 5 MiB the reading fails, and says so. One
+// builder at a time: at once, the box's error measure may be the one that runs out.
 TEST_F(CliBuild, BuilderOutOfMemoryIsNamedAndLeavesNoOutput) {
   const std::string mesh = testing::cgal_mesh("bunny00.off").string();
   const std::filesystem::path out = folder_ / "out";
   const auto result = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
-                                            "' --proxy aabb --proxy wrap --memory-limit 0.025");
+                                            "' --proxy aabb --proxy wrap --builders-at-once 1 --memory-limit 0.025");
   EXPECT_EQ(result.exit_code, 3) << result.err;
   EXPECT_EQ(result.err, "visproxy: " + mesh + ": wrap: out of memory while building it\n");
   EXPECT_FALSE(std::filesystem::exists(out));
@@ -240,16 +241,24 @@ TEST_F(CliBuild, BuilderOutOfMemoryIsNamedAndLeavesNoOutput) {
   EXPECT_EQ(roomy.exit_code, 0) << roomy.err;
 }
 
-// A build past its time limit names the step in progress, exits 3 and writes nothing: the
+// A build past its time limit names the steps in progress, exits 3 and writes nothing: the
 // bunny's outer:512 (about 1.5 s) under 0.5 s, and the error measure of a box over 10^7
 // samples (over a minute) under 1 s, after the box itself was built in milliseconds.
 TEST_F(CliBuild, BuildOutOfTimeNamesTheStepAndLeavesNoOutput) {
   const std::string mesh = testing::cgal_mesh("bunny00.off").string();
   const std::filesystem::path out = folder_ / "out";
   const auto building = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
-                                              "' --proxy aabb --proxy outer:512 --time-limit 0.5");
+                                              "' --proxy aabb --proxy outer:512 --builders-at-once 1 --time-limit 0.5");
   EXPECT_EQ(building.exit_code, 3) << building.err;
   EXPECT_EQ(building.err, "visproxy: " + mesh + ": outer:512: out of time while building it (--time-limit 0.5 s)\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // Two builders at once (outer:512 about 1.5 s, wrap about 0.9 s): both are named.
+  const auto both = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
+                                          "' --proxy wrap --proxy outer:512 --builders-at-once 2 --time-limit 0.3");
+  EXPECT_EQ(both.exit_code, 3) << both.err;
+  EXPECT_EQ(both.err, "visproxy: " + mesh +
+                          ": outer:512: out of time while building it; wrap: out of time while building it "
+                          "(--time-limit 0.3 s)\n");
   EXPECT_FALSE(std::filesystem::exists(out));
   const auto measuring = testing::run_visproxy("build '" + mesh + "' -o '" + out.string() +
                                                "' --proxy aabb --hausdorff-samples 10000000 --time-limit 1");

@@ -5,6 +5,11 @@
 #include "visproxy/proxy/build_proxies.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <mutex>
+#include <string>
+#include <vector>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/inspect/exact_checks.h"
@@ -146,6 +151,96 @@ TEST(BuildProxies, InputErrorsNameTheSourceAndTheSpec) {
     EXPECT_NE(std::string(error.what()).find("two.obj: cluster:0.5: every triangle collapsed"), std::string::npos)
         << error.what();
   }
+}
+
+// Specs built at once give the proxies of one after another, bit for bit, and in spec
+// order: the same manifests but for the build seconds, on a closed mesh with every kind
+// (spheres with two levels) and on one with boundaries, per component.
+TEST(BuildProxies, BuildingAtOnceGivesTheProxiesOfOneAfterAnother) {
+  struct Case {
+    const char* name;
+    TriangleMesh mesh;
+    std::vector<std::string> specs;
+    bool per_component;
+  };
+  const std::vector<Case> cases = {
+      {"knot1", read_mesh(testing::cgal_mesh("knot1.off")),
+       {"aabb", "obb", "hull", "hull:16", "wrap", "outer:64", "inner:64", "quadric:64", "cluster:0.05", "inside:8",
+        "spheres:20,10"},
+       false},
+      {"two far apart, per component", two_far_apart(), {"cluster:0.0002", "hull:8", "aabb", "outer:64"}, true},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::vector<ProxySpec> specs = parse_proxy_specs(c.specs);
+    std::vector<std::string> started;
+    std::mutex started_mutex;
+    auto build = [&](std::size_t at_once) {
+      BuildOptions options{.per_component = c.per_component, .hausdorff_samples = 2000, .seed = 4,
+                           .on_start = [&](std::string_view name) {
+                             const std::lock_guard lock(started_mutex);
+                             started.emplace_back(name);
+                           },
+                           .gssa_lines = 5000};
+      options.builders_at_once = at_once;
+      return build_proxies(c.mesh, "mesh.off", specs, options);
+    };
+    const std::vector<BuiltProxy> one = build(1);
+    ASSERT_EQ(started.size(), specs.size());
+    for (const std::size_t at_once : {2u, 3u}) {
+      SCOPED_TRACE(at_once);
+      started.clear();
+      const std::vector<BuiltProxy> many = build(at_once);
+      EXPECT_EQ(started.size(), specs.size());
+      ASSERT_EQ(many.size(), one.size());
+      for (std::size_t i = 0; i < one.size(); ++i) {
+        SCOPED_TRACE(one[i].name);
+        EXPECT_EQ(many[i].name, one[i].name);
+        EXPECT_EQ(many[i].mesh.positions, one[i].mesh.positions);
+        EXPECT_EQ(many[i].mesh.triangles, one[i].mesh.triangles);
+        EXPECT_EQ(many[i].result, one[i].result);
+        EXPECT_EQ(many[i].error, one[i].error);
+        EXPECT_EQ(many[i].params, one[i].params);
+      }
+    }
+  }
+}
+
+// When several specs fail, the error is the first failing one's in spec order, as one
+// after another would give, although the workers take the slow kinds first: cluster:0.5
+// (first, taken last) and inside:8 (third, taken early) both fail on an open mesh of two
+// far-apart parts while outer:64 (second) runs.
+TEST(BuildProxies, BuildingAtOnceThrowsTheFirstFailureInSpecOrder) {
+  TriangleMesh open = two_far_apart();
+  open.triangles.pop_back();
+  const std::vector<ProxySpec> specs = parse_proxy_specs({"cluster:0.5", "outer:64", "inside:8"});
+  for (const std::size_t at_once : {1u, 2u, 3u}) {
+    SCOPED_TRACE(at_once);
+    BuildOptions options;
+    options.builders_at_once = at_once;
+    try {
+      build_proxies(open, "open.obj", specs, options);
+      FAIL() << "failing specs built";
+    } catch (const InvalidInputError& error) {
+      EXPECT_NE(std::string(error.what()).find("open.obj: cluster:0.5: every triangle collapsed"), std::string::npos)
+          << error.what();
+    }
+  }
+  // Without the first, the third's error.
+  BuildOptions options;
+  options.builders_at_once = 2;
+  try {
+    build_proxies(open, "open.obj", parse_proxy_specs({"outer:64", "inside:8"}), options);
+    FAIL() << "inside:8 built on an open mesh";
+  } catch (const InvalidInputError& error) {
+    EXPECT_NE(std::string(error.what()).find("open.obj: inside:8: "), std::string::npos) << error.what();
+  }
+}
+
+TEST(BuildProxies, BuildersAtOnceFollowsTheMeshSize) {
+  EXPECT_EQ(builders_at_once(3, 10'000'000), 3u);
+  EXPECT_EQ(builders_at_once(0, kConcurrentBuildTriangles + 1), 1u);
+  EXPECT_EQ(builders_at_once(0, 1000), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
 }
 
 }  // namespace
