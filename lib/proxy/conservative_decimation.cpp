@@ -40,9 +40,13 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -291,9 +295,9 @@ class InputGeometry {
       return false;
     };
     if (any_overlapping(triangle_tree_, query, close_to_triangle)) return true;
-    scratch_segment_hits_.clear();
-    if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(scratch_segment_hits_));
-    for (const auto& id : scratch_segment_hits_) {  // degenerate input triangles
+    std::vector<SegmentPrimitive::Id> segment_hits;  // (const and safe to call from several threads)
+    if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(segment_hits));
+    for (const auto& id : segment_hits) {  // degenerate input triangles
       const CgalSegment& segment = *id;
       if (CGAL::to_double(CGAL::squared_distance(segment.source(), t)) < limit_squared ||
           CGAL::to_double(CGAL::squared_distance(segment.target(), t)) < limit_squared)
@@ -366,7 +370,6 @@ class InputGeometry {
       cell_items_[fill[cell_of_item[i]]++] = static_cast<std::uint32_t>(i);
   }
 
-  mutable std::vector<SegmentPrimitive::Id> scratch_segment_hits_;
   std::vector<CgalTriangle> triangles_;
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
@@ -608,6 +611,14 @@ struct StarReplacement {
 }  // namespace
 
 class ConservativeDecimator::Impl {
+  // Scratch buffers of plan() and link_condition_holds(), kept to avoid reallocation (one
+  // set per thread while push_all_edges plans in parallel).
+  struct Scratch {
+    std::vector<VertexIndex> u, w;
+    std::vector<std::uint32_t> star;
+    std::vector<HalfSpace3> planes;
+  };
+
  public:
   Impl(const TriangleMesh& wrap, const InputGeometry& input)
       : input_(input), positions_(wrap.positions), triangles_(wrap.triangles),
@@ -730,17 +741,20 @@ class ConservativeDecimator::Impl {
   // (a) The link condition for a closed manifold: u and w have exactly the two neighbours in
   // common that the triangles on edge uw give them, and neither of those would drop to
   // degree 2 (the tetrahedron case).
-  bool link_condition_holds(VertexIndex u, VertexIndex w) const {
-    neighbours(u, scratch_u_);
-    neighbours(w, scratch_w_);
+  bool link_condition_holds(VertexIndex u, VertexIndex w) const { return link_condition_holds(u, w, scratch_); }
+  bool link_condition_holds(VertexIndex u, VertexIndex w, Scratch& scratch) const {
+    std::vector<VertexIndex>& around_u = scratch.u;
+    std::vector<VertexIndex>& around_w = scratch.w;
+    neighbours(u, around_u);
+    neighbours(w, around_w);
     std::size_t common = 0;
-    for (std::size_t i = 0, j = 0; i < scratch_u_.size() && j < scratch_w_.size();) {
-      if (scratch_u_[i] < scratch_w_[j]) {
+    for (std::size_t i = 0, j = 0; i < around_u.size() && j < around_w.size();) {
+      if (around_u[i] < around_w[j]) {
         ++i;
-      } else if (scratch_w_[j] < scratch_u_[i]) {
+      } else if (around_w[j] < around_u[i]) {
         ++j;
       } else {
-        if (++common > 2 || vertex_triangles_[scratch_u_[i]].size() <= 3) return false;
+        if (++common > 2 || vertex_triangles_[around_u[i]].size() <= 3) return false;
         ++i;
         ++j;
       }
@@ -748,8 +762,10 @@ class ConservativeDecimator::Impl {
     return common == 2;
   }
 
-  std::optional<CollapsePlan> plan(VertexIndex u, VertexIndex w) const {
-    if (!link_condition_holds(u, w)) return std::nullopt;
+  std::optional<CollapsePlan> plan(VertexIndex u, VertexIndex w, Scratch& scratch) const {
+    if (!link_condition_holds(u, w, scratch)) return std::nullopt;
+    std::vector<std::uint32_t>& scratch_star_ = scratch.star;
+    std::vector<HalfSpace3>& scratch_planes_ = scratch.planes;
     star(u, w, scratch_star_);
     // Work in coordinates centred on the edge and scaled to the star's size.
     const Vertex centre = 0.5 * (positions_[u] + positions_[w]);
@@ -793,22 +809,42 @@ class ConservativeDecimator::Impl {
   void push_edge(VertexIndex u, VertexIndex w) {
     const VertexIndex keep = std::min(u, w);
     const VertexIndex remove = std::max(u, w);
-    const std::optional<CollapsePlan> p = plan(keep, remove);
+    push_plan(keep, remove, plan(keep, remove, scratch_));
+  }
+
+  void push_plan(VertexIndex keep, VertexIndex remove, const std::optional<CollapsePlan>& p) {
     if (!p) return;
     queue_.push({p->added_volume, keep, remove, vertex_version_[keep], vertex_version_[remove], p->position});
   }
 
+  // Edges (keep < remove) planned, in parallel when there are many (plans read the mesh
+  // only), and queued in the order given, so that the queue is the same whatever the threads.
+  void push_edges(const std::vector<std::pair<VertexIndex, VertexIndex>>& edges) {
+    if (edges.size() < kParallelPlans) {
+      for (const auto& [a, b] : edges) push_plan(a, b, plan(a, b, scratch_));
+      return;
+    }
+    plans_.assign(edges.size(), std::nullopt);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges.size(), 16), [&](const tbb::blocked_range<std::size_t>& range) {
+      Scratch& scratch = scratches_.local();
+      for (std::size_t e = range.begin(); e != range.end(); ++e) plans_[e] = plan(edges[e].first, edges[e].second, scratch);
+    });
+    for (std::size_t e = 0; e < edges.size(); ++e) push_plan(edges[e].first, edges[e].second, plans_[e]);
+  }
+
   void push_all_edges() {
     queue_ = {};
+    std::vector<std::pair<VertexIndex, VertexIndex>> edges;
     for (std::size_t t = 0; t < triangles_.size(); ++t) {
       if (!triangle_alive_[t]) continue;
       const Triangle& triangle = triangles_[t];
       for (std::size_t i = 0; i < 3; ++i) {
         const VertexIndex a = triangle[i];
         const VertexIndex b = triangle[(i + 1) % 3];
-        if (a < b) push_edge(a, b);  // each edge of a closed oriented surface once
+        if (a < b) edges.emplace_back(a, b);  // each edge of a closed oriented surface once
       }
     }
+    push_edges(edges);
   }
 
   TriangleCorners corners_of(std::uint32_t t) const {
@@ -931,13 +967,27 @@ class ConservativeDecimator::Impl {
       if (!fan_outside) break;
     }
     if (fan_outside) fan_outside = starts_outside(r).value_or(false);
-    if (!fan_outside)
-      for (const TriangleCorners& c : r.created)
-        if (input_.meets(CgalTriangle(c.points[0], c.points[1], c.points[2]))) return false;
-    // The clearance asked for, whichever side the fan is on.
-    if (keep_clear_ > 0)
-      for (const TriangleCorners& c : r.created)
-        if (input_.comes_within(CgalTriangle(c.points[0], c.points[1], c.points[2]), keep_clear_)) return false;
+    // Then the clearance asked for, whichever side the fan is on. The new triangles are
+    // tested in parallel: whether any fails does not depend on the order.
+    const bool must_miss = !fan_outside, must_keep_clear = keep_clear_ > 0;
+    if (must_miss || must_keep_clear) {
+      auto fails = [&](const TriangleCorners& c) {
+        const CgalTriangle t(c.points[0], c.points[1], c.points[2]);
+        return (must_miss && input_.meets(t)) || (must_keep_clear && input_.comes_within(t, keep_clear_));
+      };
+      std::atomic<bool> failed{false};
+      if (r.created.size() < 4) {
+        for (const TriangleCorners& c : r.created)
+          if (fails(c)) return false;
+      } else {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, r.created.size(), 2),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                            for (std::size_t i = range.begin(); i != range.end() && !failed; ++i)
+                              if (fails(r.created[i])) failed = true;
+                          });
+        if (failed) return false;
+      }
+    }
 
     // (d) No input component changes side: test the representatives inside the closed
     // surface old star ∪ new fan.
@@ -1018,7 +1068,7 @@ class ConservativeDecimator::Impl {
     }
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-    for (const auto& [a, b] : edges) push_edge(a, b);
+    push_edges(edges);
   }
 
   void rebuild_grid() {
@@ -1059,11 +1109,11 @@ class ConservativeDecimator::Impl {
   std::uint64_t query_stamp_ = 0;
   Random directions_;
   std::priority_queue<QueueEntry> queue_;
-  // Scratch buffers of plan() and link_condition_holds(), kept to avoid reallocation.
+  mutable Scratch scratch_;
+  static constexpr std::size_t kParallelPlans = 32;  // fewer edges are planned on this thread
+  tbb::enumerable_thread_specific<Scratch> scratches_;
+  std::vector<std::optional<CollapsePlan>> plans_;
   mutable std::vector<VertexIndex> scratch_u_;
-  mutable std::vector<VertexIndex> scratch_w_;
-  mutable std::vector<std::uint32_t> scratch_star_;
-  mutable std::vector<HalfSpace3> scratch_planes_;
 };
 
 namespace {

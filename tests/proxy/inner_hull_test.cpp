@@ -1,6 +1,7 @@
 #include "visproxy/proxy/inner_hull.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -186,13 +187,19 @@ INSTANTIATE_TEST_SUITE_P(LibCgalDemo, InnerHullOfRealMesh,
                            return testing::test_name_from(param_info.param);
                          });
 
-TEST(InnerHull, IsDeterministic) {
+// The same mesh on one thread or several: edges are planned and new triangles checked in
+// parallel, and neither may change a collapse.
+TEST(InnerHull, IsDeterministicOnAnyNumberOfThreads) {
   const TriangleMesh mesh = read_mesh(testing::cgal_mesh("knot1.off"));
   const InnerHullOptions options{.max_triangles = 64, .grid_cells = 40};
   const InnerHullResult first = build_inner_hull(mesh, options);
-  const InnerHullResult second = build_inner_hull(mesh, options);
-  EXPECT_EQ(first.mesh, second.mesh);
-  EXPECT_EQ(first.max_distance_to_input_world, second.max_distance_to_input_world);
+  for (const int threads : {1, 3}) {
+    SCOPED_TRACE(threads);
+    tbb::task_arena arena(threads);
+    const InnerHullResult second = arena.execute([&] { return build_inner_hull(mesh, options); });
+    EXPECT_EQ(first.mesh, second.mesh);
+    EXPECT_EQ(first.max_distance_to_input_world, second.max_distance_to_input_world);
+  }
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "visproxy/proxy/outer_hull.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -176,13 +177,19 @@ INSTANTIATE_TEST_SUITE_P(LibCgalDemo, OuterHullOfRealMesh,
                                            "elephant-with-holes.off", "pig.stl"),
                          [](const ::testing::TestParamInfo<const char*>& param_info) { return testing::test_name_from(param_info.param); });
 
-TEST(OuterHull, IsDeterministic) {
+// The same mesh on one thread or several: edges are planned and new triangles checked in
+// parallel, and neither may change a collapse.
+TEST(OuterHull, IsDeterministicOnAnyNumberOfThreads) {
   const TriangleMesh mesh = read_mesh(testing::cgal_mesh("elephant-with-holes.off"));
   const OuterHullOptions options{.max_triangles = 64, .wrap_alpha_relative = 1.0 / 12, .wrap_offset_relative = 1.0 / 150};
   const OuterHullResult first = build_outer_hull(mesh, options);
-  const OuterHullResult second = build_outer_hull(mesh, options);
-  EXPECT_EQ(first.mesh, second.mesh);
-  EXPECT_EQ(first.max_distance_to_input_world, second.max_distance_to_input_world);
+  for (const int threads : {1, 3}) {
+    SCOPED_TRACE(threads);
+    tbb::task_arena arena(threads);
+    const OuterHullResult second = arena.execute([&] { return build_outer_hull(mesh, options); });
+    EXPECT_EQ(first.mesh, second.mesh);
+    EXPECT_EQ(first.max_distance_to_input_world, second.max_distance_to_input_world);
+  }
 }
 
 TEST(OuterHull, RejectsBadOptionsAndEmptyInput) {
