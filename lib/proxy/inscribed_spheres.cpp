@@ -8,10 +8,6 @@
 
 #include "visproxy/proxy/inscribed_spheres.h"
 
-#include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
-#include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
@@ -25,6 +21,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
 #include "visproxy/proxy/delaunay_cells.h"
+#include "visproxy/proxy/surface_distance.h"
 #include "visproxy/proxy/surface_samples.h"
 #include "visproxy/proxy/watertight_input.h"
 #include "visproxy/verify/containment.h"
@@ -33,10 +30,6 @@
 namespace visproxy {
 namespace {
 
-using Kernel = CGAL::Simple_cartesian<double>;
-using CgalTriangle = Kernel::Triangle_3;
-using Primitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
-using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
 
 constexpr double kZ95 = 1.959964;
@@ -304,23 +297,12 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
   const auto holding = balls_holding(volume_points, candidates);
 
   // Choose; each candidate reaching the top is measured: radius = distance to the surface
-  // (closest point on the triangles, CGAL AABB tree) minus the margin.
-  std::vector<CgalTriangle> triangles;
-  triangles.reserve(mesh.triangles.size());
-  for (const Triangle& t : mesh.triangles) {
-    auto point = [&](VertexIndex v) {
-      return Kernel::Point_3(mesh.positions[v].x(), mesh.positions[v].y(), mesh.positions[v].z());
-    };
-    triangles.emplace_back(point(t[0]), point(t[1]), point(t[2]));
-  }
-  Tree tree(triangles.begin(), triangles.end());
-  tree.build();
-  tree.accelerate_distance_queries();
+  // (closest point on the triangles, surface_distance.h's tree over triangle indices, which
+  // builds in a fraction of the time of a tree over copied triangles) minus the margin.
+  const MeasuredSurface surface(mesh, "mesh");
   const std::vector<std::uint32_t> order =
-      choose_greedily(candidates, volume_points, holding, options.count, [&](std::uint32_t ball) {
-        const Vertex& c = candidates[ball].center;
-        return std::sqrt(tree.squared_distance(Kernel::Point_3(c.x(), c.y(), c.z()))) - margin;
-      });
+      choose_greedily(candidates, volume_points, holding, options.count,
+                      [&](std::uint32_t ball) { return surface.distance_to(candidates[ball].center) - margin; });
   if (order.size() < options.count)
     throw InvalidInputError("", "only " + std::to_string(order.size()) +
                                     " candidate spheres keep a positive radius inside the surface: ask for at most " +

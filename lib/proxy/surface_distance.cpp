@@ -102,6 +102,7 @@ struct MeasuredSurface::Impl {
   std::vector<VertexIndex> vertices;
   std::vector<std::uint32_t> triangles;
   std::vector<double> cumulative_area;  // running sum over `triangles`
+  std::vector<std::uint32_t> collinear;  // the triangles left out of `triangles`
   Tree tree;
 
   // Area-uniform points on the surface, in triangle order (so that consecutive queries are near).
@@ -198,7 +199,10 @@ MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : i
     const Vertex& a = mesh.positions[triangle[0]];
     const Vertex& b = mesh.positions[triangle[1]];
     const Vertex& c = mesh.positions[triangle[2]];
-    if (exactly_collinear(a, b, c)) continue;
+    if (exactly_collinear(a, b, c)) {
+      s.collinear.push_back(static_cast<std::uint32_t>(i));
+      continue;
+    }
     s.triangles.push_back(static_cast<std::uint32_t>(i));
     const double area = (b - a).cross(c - a).norm() / 2;
     s.cumulative_area.push_back((s.cumulative_area.empty() ? 0.0 : s.cumulative_area.back()) + area);
@@ -216,6 +220,19 @@ MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : i
 }
 
 MeasuredSurface::~MeasuredSurface() = default;
+
+double MeasuredSurface::distance_to(const Vertex& p) const {
+  const Impl& s = *impl_;
+  const Point q = point(p);
+  double squared = s.tree.squared_distance(q);
+  for (const std::uint32_t t : s.collinear) {
+    const Triangle& triangle = s.mesh->triangles[t];
+    for (std::size_t k = 0; k < 3; ++k)
+      squared = std::min(squared, CGAL::squared_distance(q, Kernel::Segment_3(point(s.mesh->positions[triangle[k]]),
+                                                                             point(s.mesh->positions[triangle[(k + 1) % 3]]))));
+  }
+  return std::sqrt(squared);
+}
 
 namespace {
 

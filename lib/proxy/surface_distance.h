@@ -39,6 +39,10 @@ class MeasuredSurface {
   MeasuredSurface(const MeasuredSurface&) = delete;
   MeasuredSurface& operator=(const MeasuredSurface&) = delete;
 
+  /// Distance from `p` to the surface: to its nearest triangle (exact closest point, the
+  /// AABB tree), triangles with collinear corners included as their sides.
+  double distance_to(const Vertex& p) const;
+
   struct Impl;
   const Impl& impl() const { return *impl_; }
 

@@ -130,6 +130,23 @@ TEST(SurfaceDistance, PruningGivesTheDistanceOfMeasuringEveryPoint) {
   }
 }
 
+// distance_to: the exact distance to the nearest triangle, far from the origin too; a
+// triangle with collinear corners (left out of the tree) still counts, through its sides.
+TEST(SurfaceDistance, DistanceToAPointCountsEveryTriangle) {
+  const Vertex far(2.0e6, -3.0e5, 1.0e5);
+  TriangleMesh mesh = transformed(testing::unit_cube(), 1.0, Vertex::Zero(), far);
+  const auto base = static_cast<VertexIndex>(mesh.positions.size());
+  mesh.positions.push_back(far + Vertex(5, 0, 0));
+  mesh.positions.push_back(far + Vertex(6, 0, 0));
+  mesh.positions.push_back(far + Vertex(8, 0, 0));
+  mesh.triangles.push_back({base, base + 1, base + 2});
+  const MeasuredSurface surface(mesh);
+  EXPECT_NEAR(surface.distance_to(far + Vertex(0.5, 0.5, 3)), 2.0, 1e-9);    // above the top face
+  EXPECT_NEAR(surface.distance_to(far + Vertex(0.5, 0.5, 0.25)), 0.25, 1e-9);  // inside, nearest the bottom
+  EXPECT_NEAR(surface.distance_to(far + Vertex(7, 0.75, 0)), 0.75, 1e-9);      // beside the collinear triangle
+  EXPECT_NEAR(surface.distance_to(far + Vertex(9, 0, 0)), 1.0, 1e-9);          // past its far corner
+}
+
 TEST(SurfaceDistance, RejectsMeshesWithoutArea) {
   EXPECT_THROW(sampled_hausdorff_distance(TriangleMesh{}, testing::unit_cube()), InvalidInputError);
   TriangleMesh flat;
