@@ -310,12 +310,12 @@ py::object inspect_arrays(py::handle vertices, py::handle triangles, const std::
 py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<std::vector<std::string>> specs_text,
                       std::uint64_t seed, bool per_component, std::size_t hausdorff_samples, const std::string& tets,
                       std::size_t gssa_lines, std::optional<std::filesystem::path> output, const std::string& source,
-                      const std::string& weld) {
+                      const std::string& weld, std::size_t builders_at_once) {
   const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
   const std::vector<ProxySpec> specs = specs_text ? parse_proxy_specs(*specs_text) : default_proxy_specs();
   if (hausdorff_samples < 100) throw py::value_error("hausdorff_samples: must be at least 100");
   if (gssa_lines < 1000) throw py::value_error("gssa_lines: must be at least 1000");
-  const BuildOptions options{
+  BuildOptions options{
       .per_component = per_component,
       .hausdorff_samples = hausdorff_samples,
       .seed = seed,
@@ -324,6 +324,7 @@ py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<s
       .gssa_lines = gssa_lines,
       .skip_inside_unless_closed = !specs_text.has_value(),
       .on_skip = {}};
+  options.builders_at_once = builders_at_once;
   weld_mode(weld);  // checked: recorded in the manifest as how the source was read
   std::vector<BuiltProxy> built;
   {
@@ -606,11 +607,12 @@ PYBIND11_MODULE(visproxy, m) {
         "self-intersections, area, volume, watertight) as a dict. `source` names the mesh in errors.");
   m.def("build", &build_arrays, "vertices"_a, "triangles"_a, "specs"_a = py::none(), py::kw_only(), "seed"_a = 1,
         "per_component"_a = false, "hausdorff_samples"_a = 20000, "tets"_a = "normals", "gssa_lines"_a = 100000,
-        "output"_a = py::none(), "source"_a = "mesh arrays", "weld"_a = "auto",
+        "output"_a = py::none(), "source"_a = "mesh arrays", "weld"_a = "auto", "builders_at_once"_a = 0,
         "Builds proxies as 'visproxy build' does, from the same specs ('aabb', 'hull:32', 'spheres:100', ...; None: the "
         "default set) and seed: the same arrays, bit for bit. Returns a list of proxy dicts. With `output`, also writes the "
         "proxy folder (PLY/OBJ or sphere-set JSON files and manifest.json) there, recording `source` and `weld` as the "
-        "mesh it came from.");
+        "mesh it came from. `builders_at_once` as --builders-at-once (0: the machine's threads up to 2^20 triangles, 1 "
+        "above); the proxies do not depend on it.");
   m.def("read_proxies", &read_proxies_folder, "folder"_a,
         "The proxies of a folder 'visproxy build' wrote, as proxy dicts with their manifest entries (verify and measure "
         "results included when recorded). Files that do not hold what the manifest says raise InvalidInputError.");

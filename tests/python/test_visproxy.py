@@ -107,6 +107,20 @@ def test_every_builder_returns_its_proxies_as_arrays_with_their_manifest_entries
     assert len(knot_proxies[names.index("quadric-200")]["triangles"]) <= 200
 
 
+def test_builders_at_once_give_the_proxies_of_one_after_another(knot, knot_proxies):
+    one = vp.build(*knot, EVERY_BUILDER, seed=7, builders_at_once=1)
+    three = vp.build(*knot, EVERY_BUILDER, seed=7, builders_at_once=3)
+    assert [p["name"] for p in one] == [p["name"] for p in knot_proxies] == [p["name"] for p in three]
+    for a, b, c in zip(one, three, knot_proxies):
+        for key in ("vertices", "triangles", "spheres"):
+            if a[key] is None:
+                assert b[key] is None and c[key] is None
+            else:
+                assert np.array_equal(a[key], b[key]) and np.array_equal(a[key], c[key])
+        entries = [{k: v for k, v in p["manifest"].items() if k != "build_seconds"} for p in (a, b, c)]
+        assert entries[0] == entries[1] == entries[2]
+
+
 def test_every_claim_of_every_builder_is_verified(knot, knot_proxies):
     verdicts = vp.verify(*knot, knot_proxies)
     assert len(verdicts) == len(knot_proxies)
