@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cmath>
 #include <exception>
 #include <mutex>
-#include <chrono>
 #include <new>
-#include <cmath>
 #include <optional>
 
 #include <tbb/task_arena.h>
