@@ -297,8 +297,8 @@ InscribedSpheres build_inscribed_spheres(const TriangleMesh& mesh, const Inscrib
   const auto holding = balls_holding(volume_points, candidates);
 
   // Choose; each candidate reaching the top is measured: radius = distance to the surface
-  // (closest point on the triangles, surface_distance.h's tree over triangle indices, which
-  // builds in a fraction of the time of a tree over copied triangles) minus the margin.
+  // (closest point on the triangles through surface_distance.h's BVH over triangle indices,
+  // built in parallel, with no copy of the triangles) minus the margin.
   const MeasuredSurface surface(mesh, "mesh");
   const std::vector<std::uint32_t> order =
       choose_greedily(candidates, volume_points, holding, options.count,

@@ -69,7 +69,7 @@ double inscribed_sphere_margin(const BoundingBox& bounds, double margin_relative
 /// volume not yet covered (lazy greedy, so overlapping balls are passed over), which is
 /// within 1 - 1/e of the best N-ball choice for that point set. A candidate's radius is its
 /// circumradius until it first tops the queue; then it is measured: distance to the surface
-/// (CGAL AABB tree) minus the margin. Deterministic for a seed.
+/// (closest point through MeasuredSurface's BVH) minus the margin. Deterministic for a seed.
 ///
 /// The mesh must be closed (every edge used as often in each direction): its solid is
 /// {winding number != 0}, which is well defined even where the surface self-intersects or

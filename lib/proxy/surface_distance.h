@@ -28,9 +28,9 @@ struct SurfaceDistance {
 };
 
 /// The surface of one mesh, prepared for the distance queries of sampled_hausdorff_distance:
-/// its used vertices, its triangles of non-zero area and their running area, and a CGAL AABB
-/// tree over those triangles' indices (about 70 bytes a triangle; the triangles are read from
-/// the mesh, not copied). Made once, it serves every measure against the mesh. The mesh must
+/// its used vertices, its triangles of non-zero area and their running area, and a BVH over
+/// those triangles' indices (trace/triangle_distance.h; the triangles are read from the
+/// mesh, not copied). Made once, it serves every measure against the mesh. The mesh must
 /// outlive it. Throws as sampled_hausdorff_distance does.
 class MeasuredSurface {
  public:
@@ -39,8 +39,8 @@ class MeasuredSurface {
   MeasuredSurface(const MeasuredSurface&) = delete;
   MeasuredSurface& operator=(const MeasuredSurface&) = delete;
 
-  /// Distance from `p` to the surface: to its nearest triangle (exact closest point, the
-  /// AABB tree), triangles with collinear corners included as their sides.
+  /// Distance from `p` to the surface: to its nearest triangle (closest point in double
+  /// precision, through the BVH), triangles with collinear corners included as their sides.
   double distance_to(const Vertex& p) const;
 
   struct Impl;
@@ -53,8 +53,8 @@ class MeasuredSurface {
 /// Sampled two-sided Hausdorff distance between the surfaces of `a` and `b`, in world units.
 /// The samples of each mesh are every vertex its triangles use plus
 /// `options.samples_per_mesh` points drawn uniformly by area from `options.seed`; each is
-/// measured to the exact closest point of the other mesh (CGAL AABB tree over its
-/// triangles). The result is a lower bound of the true Hausdorff distance that converges to
+/// measured to its closest point on the other mesh in double precision (a BVH over its
+/// triangles that never culls a nearer one: trace/triangle_distance.h). The result is a lower bound of the true Hausdorff distance that converges to
 /// it as samples grow; it is exact whenever the farthest point is a vertex (for instance
 /// between two polyhedra whose farthest points are corners). Deterministic for a seed.
 ///
