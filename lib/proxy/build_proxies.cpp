@@ -490,8 +490,13 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
           const std::size_t i = order[k];
           if (i > first_failed) continue;
           try {
-            built[i] = build_spec(specs[i]);
-            measure_spec(built[i]);
+            // Isolated: while this spec's own parallel loops wait, the thread runs only
+            // their tasks, never another worker's spec on top of this one (which could
+            // re-enter the call_once that prepares the mesh's distance BVH and deadlock).
+            tbb::this_task_arena::isolate([&] {
+              built[i] = build_spec(specs[i]);
+              measure_spec(built[i]);
+            });
             if (options.on_step_done) options.on_step_done(specs[i].text);
           } catch (...) {
             errors[i] = std::current_exception();

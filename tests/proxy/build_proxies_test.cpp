@@ -187,7 +187,7 @@ TEST(BuildProxies, BuildingAtOnceGivesTheProxiesOfOneAfterAnother) {
     };
     const std::vector<BuiltProxy> one = build(1);
     ASSERT_EQ(started.size(), specs.size());
-    for (const std::size_t at_once : {2u, 3u}) {
+    for (const std::size_t at_once : {2u, 3u, 8u}) {  // 8: more workers than threads
       SCOPED_TRACE(at_once);
       started.clear();
       const std::vector<BuiltProxy> many = build(at_once);
