@@ -90,7 +90,7 @@ double resident_mb() {
 // The hidden --one mode: read FILE, build SPEC, write a ChildReport to descriptor 3.
 int build_one(const std::string& spec_text, const std::filesystem::path& file) {
   ChildReport report;
-  try {
+  return bench::report_to_parent(report, [&] {
     const TriangleMesh mesh = read_mesh(file, {.weld = Weld::never, .on_warning = {}});
     report.read_mb = resident_mb();
     const std::vector<ProxySpec> specs = parse_proxy_specs({spec_text});
@@ -98,13 +98,7 @@ int build_one(const std::string& spec_text, const std::filesystem::path& file) {
     options.hausdorff_samples = 100;  // the error is not what is timed here
     const BuiltProxy proxy = build_proxies(mesh, file, specs, options).front();
     report.ok = 1, report.primitives = proxy.primitives, report.seconds = proxy.build_seconds;
-  } catch (const std::bad_alloc&) {
-    std::snprintf(report.message, sizeof report.message, "out of memory");
-  } catch (const std::exception& e) {
-    std::snprintf(report.message, sizeof report.message, "failed: %s", e.what());
-  }
-  [[maybe_unused]] const ssize_t written = ::write(3, &report, sizeof report);
-  return 0;
+  });
 }
 
 Run run_builder(const std::filesystem::path& file, std::size_t triangles, const ProxySpec& spec, int time_limit,

@@ -87,7 +87,7 @@ struct Settings {
 // The hidden --one mode: render SCENE in mode INDEX, write a ChildReport to descriptor 3.
 int render_one(const std::string& scene_path, std::size_t index, const Settings& s) {
   ChildReport report;
-  try {
+  return bench::report_to_parent(report, [&] {
     const Mode mode = modes(s.spp, s.shadow_rays, s.vpls, s.seed).at(index);
     const auto start = std::chrono::steady_clock::now();
     Scene scene = load_scene(scene_path);
@@ -103,13 +103,7 @@ int render_one(const std::string& scene_path, std::size_t index, const Settings&
     report.rays = mode.options.integrator == IntegratorKind::vpl ? result.stats.vpl_connections : result.stats.shadow_rays;
     report.image_hash = fnv1a(result.image.pixels.data(), result.image.pixels.size() * sizeof(Color));
     report.ok = 1;
-  } catch (const std::bad_alloc&) {
-    std::snprintf(report.message, sizeof report.message, "out of memory");
-  } catch (const std::exception& e) {
-    std::snprintf(report.message, sizeof report.message, "failed: %s", e.what());
-  }
-  [[maybe_unused]] const ssize_t written = ::write(3, &report, sizeof report);
-  return 0;
+  });
 }
 
 struct Run {

@@ -11,6 +11,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -64,6 +66,23 @@ inline ChildRun run_self(const std::vector<std::string>& arguments, void* report
   run.reported = got == size;
   run.peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB on Linux
   return run;
+}
+
+/// The child's side: runs `work`, which fills `report` (a struct with a `char message[]`)
+/// and sets its `ok`; a failure is recorded in `report.message` instead ("out of memory",
+/// "failed: WHAT"). The report is written to descriptor 3 either way. Returns the child's
+/// exit code, 0.
+template <typename Report, typename Work>
+int report_to_parent(Report& report, Work work) {
+  try {
+    work();
+  } catch (const std::bad_alloc&) {
+    std::snprintf(report.message, sizeof report.message, "out of memory");
+  } catch (const std::exception& e) {
+    std::snprintf(report.message, sizeof report.message, "failed: %s", e.what());
+  }
+  [[maybe_unused]] const ssize_t written = ::write(3, &report, sizeof report);
+  return 0;
 }
 
 /// Why a child that wrote no report ended: out of time (SIGALRM after `time_limit` s),
