@@ -17,6 +17,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
 #include <memory>
 #include <vector>
 
@@ -43,10 +44,10 @@ double uniform(std::mt19937_64& random) { return static_cast<double>(random() >>
 struct MeasuredSurface::Impl {
   const TriangleMesh* mesh = nullptr;
   std::vector<VertexIndex> vertices;
-  std::vector<std::uint32_t> triangles;
-  std::vector<double> cumulative_area;  // running sum over `triangles`
-  std::vector<std::uint32_t> collinear;  // the triangles left out of `triangles`
-  std::unique_ptr<TriangleDistance> tree;  // over `triangles`
+  std::vector<double> cumulative_area;  // running sum over the tree's triangles
+  std::vector<std::uint32_t> collinear;  // the triangles left out of the tree
+  std::unique_ptr<TriangleDistance> tree;  // over the triangles of non-zero area
+  double magnitude = 0;                    // the largest absolute coordinate of `vertices`
 
   // Area-uniform points on the surface, in triangle order (so that consecutive queries are near).
   std::vector<Vertex> sample(std::size_t count, std::mt19937_64& random) const {
@@ -59,7 +60,7 @@ struct MeasuredSurface::Impl {
     std::size_t t = 0;
     for (const double pick : picks) {
       while (t + 1 < cumulative_area.size() && cumulative_area[t] <= pick) ++t;
-      const Triangle& triangle = mesh->triangles[triangles[t]];
+      const Triangle& triangle = mesh->triangles[tree->triangles()[t]];
       const double s = std::sqrt(uniform(random));
       const double r = uniform(random);
       const double wa = 1 - s, wb = s * (1 - r), wc = s * r;
@@ -106,18 +107,13 @@ struct MeasuredSurface::Impl {
     return farthest(from.vertices.size(), [&](std::size_t i) { return from.mesh->positions[from.vertices[i]]; },
                     0.0, noise, prune);
   }
-  // The largest absolute coordinate of the used vertices.
-  double magnitude() const {
-    double largest = 0;
-    for (const VertexIndex v : vertices) largest = std::max(largest, mesh->positions[v].cwiseAbs().maxCoeff());
-    return largest;
-  }
 };
 
 MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : impl_(std::make_unique<Impl>()) {
   Impl& s = *impl_;
   s.mesh = &mesh;
   std::vector<std::uint8_t> used(mesh.positions.size(), 0);
+  std::vector<std::uint32_t> measured;  // the triangles of non-zero area, for the tree
   for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
     const Triangle& triangle = mesh.triangles[i];
     for (const VertexIndex v : triangle) {
@@ -130,6 +126,7 @@ MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : i
                                         std::to_string(v) + ")");
       used[v] = 1;
       s.vertices.push_back(v);
+      s.magnitude = std::max(s.magnitude, mesh.positions[v].cwiseAbs().maxCoeff());
     }
     const Vertex& a = mesh.positions[triangle[0]];
     const Vertex& b = mesh.positions[triangle[1]];
@@ -138,13 +135,13 @@ MeasuredSurface::MeasuredSurface(const TriangleMesh& mesh, const char* name) : i
       s.collinear.push_back(static_cast<std::uint32_t>(i));
       continue;
     }
-    s.triangles.push_back(static_cast<std::uint32_t>(i));
+    measured.push_back(static_cast<std::uint32_t>(i));
     const double area = (b - a).cross(c - a).norm() / 2;
     s.cumulative_area.push_back((s.cumulative_area.empty() ? 0.0 : s.cumulative_area.back()) + area);
   }
-  if (s.triangles.empty())
+  if (measured.empty())
     throw InvalidInputError("", std::string("the ") + name + " mesh has no triangle of non-zero area to measure");
-  s.tree = std::make_unique<TriangleDistance>(mesh, s.triangles);
+  s.tree = std::make_unique<TriangleDistance>(mesh, std::move(measured));
 }
 
 MeasuredSurface::~MeasuredSurface() = default;
@@ -167,7 +164,7 @@ SurfaceDistance hausdorff(const MeasuredSurface::Impl& from_a, const MeasuredSur
   std::mt19937_64 random(options.seed);
   // The pruning margin: 2^-36 of the coordinates' magnitude, thousands of times the
   // rounding of a point-triangle distance.
-  const double noise = 0x1.0p-36 * std::max({from_a.magnitude(), from_b.magnitude(), 1e-300});
+  const double noise = 0x1.0p-36 * std::max({from_a.magnitude, from_b.magnitude, 1e-300});
   SurfaceDistance distance;
   const std::vector<Vertex> samples_a = from_a.sample(options.samples_per_mesh, random);
   distance.a_to_b_world =

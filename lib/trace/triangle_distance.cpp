@@ -159,9 +159,11 @@ TriangleDistance::~TriangleDistance() {
 
 std::size_t TriangleDistance::size() const { return impl_->triangles.size(); }
 
+const std::vector<std::uint32_t>& TriangleDistance::triangles() const { return impl_->triangles; }
+
 namespace {
 
-double search(const TriangleDistance::Impl& impl, RTCScene scene, Query& query, double radius) {
+double search(const TriangleDistance::Impl& impl, Query& query, double radius) {
   RTCPointQuery point{};
   const Vertex moved = query.p - impl.centre;
   point.x = static_cast<float>(moved.x());
@@ -171,7 +173,7 @@ double search(const TriangleDistance::Impl& impl, RTCScene scene, Query& query, 
   point.radius = std::isfinite(radius) ? round_up(radius) : std::numeric_limits<float>::infinity();
   RTCPointQueryContext context;
   rtcInitPointQueryContext(&context);
-  rtcPointQuery(scene, &point, &context, visit_triangle, &query);
+  rtcPointQuery(impl.scene, &point, &context, visit_triangle, &query);
   return query.best;
 }
 
@@ -179,13 +181,13 @@ double search(const TriangleDistance::Impl& impl, RTCScene scene, Query& query, 
 
 double TriangleDistance::squared_distance(const Vertex& p) const {
   Query query{impl_.get(), p, std::numeric_limits<double>::infinity(), impl_->slack(p), false};
-  return search(*impl_, impl_->scene, query, std::numeric_limits<double>::infinity());
+  return search(*impl_, query, std::numeric_limits<double>::infinity());
 }
 
 bool TriangleDistance::within(const Vertex& p, double squared_radius) const {
   if (!(squared_radius > 0)) return false;
   Query query{impl_.get(), p, squared_radius, impl_->slack(p), true};
-  search(*impl_, impl_->scene, query, std::sqrt(squared_radius) + query.slack);
+  search(*impl_, query, std::sqrt(squared_radius) + query.slack);
   return query.found;
 }
 

@@ -39,6 +39,8 @@ class TriangleDistance {
   bool within(const Vertex& p, double squared_radius) const;
 
   std::size_t size() const;
+  /// The triangles' indices into mesh.triangles, as given.
+  const std::vector<std::uint32_t>& triangles() const;
 
   struct Impl;
 
