@@ -210,15 +210,15 @@ bool holds_every_point(const TriangleMesh& box, const std::vector<Vertex>& point
 // A pattern search from `axes`: rotations about each box axis by +-step, from 2 degrees
 // halved down to about 0.004 degrees, taking every rotation that shrinks the box fitted to
 // `points`. Never larger than the box it starts from.
-Eigen::Matrix3d refine_axes(const std::vector<Vertex>& points, Eigen::Matrix3d axes, bool flat) {
-  double best = box_size(fit_box(points, axes), flat);
+Eigen::Matrix3d refine_axes(const std::vector<Vertex>& points, Eigen::Matrix3d axes) {
+  double best = fit_box(points, axes).volume();
   for (double step = 2.0 * std::numbers::pi / 180; step > 7e-5; step *= 0.5) {
     for (bool improved = true; improved;) {
       improved = false;
       for (int k = 0; k < 3; ++k)
         for (const double angle : {step, -step}) {
           const Eigen::Matrix3d turned = orthonormal(axes * Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(k)).toRotationMatrix());
-          const double size = box_size(fit_box(points, turned), flat);
+          const double size = fit_box(points, turned).volume();
           if (size < best) best = size, axes = turned, improved = true;
         }
     }
@@ -303,7 +303,7 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
   double best = std::numeric_limits<double>::infinity();
   for (const Candidate& candidate : candidates) {
     const bool refine = !flat && candidate.name != std::string_view("axis-aligned");
-    const OrientedBox box = fit_box(corners, refine ? refine_axes(corners, candidate.axes, flat) : candidate.axes);
+    const OrientedBox box = fit_box(corners, refine ? refine_axes(corners, candidate.axes) : candidate.axes);
     if (box_size(box, flat) < best) {
       best = box_size(box, flat);
       result.box = box;
