@@ -13,41 +13,7 @@
 namespace visproxy {
 namespace {
 
-struct Node {
-  float lower[2][3], upper[2][3];  // children's boxes (inner nodes)
-  const Node* children[2] = {nullptr, nullptr};
-  std::uint32_t count = 0;        // leaf: primitives in `ids`
-  const std::uint32_t* ids = nullptr;
-  bool leaf = false;
-};
-
-void* create_node(RTCThreadLocalAllocator allocator, unsigned int, void*) {
-  void* memory = rtcThreadLocalAlloc(allocator, sizeof(Node), 16);
-  return new (memory) Node();
-}
-
-void set_children(void* node, void** children, unsigned int count, void*) {
-  for (unsigned i = 0; i < count && i < 2; ++i) static_cast<Node*>(node)->children[i] = static_cast<Node*>(children[i]);
-}
-
-void set_bounds(void* node, const RTCBounds** bounds, unsigned int count, void*) {
-  auto* n = static_cast<Node*>(node);
-  for (unsigned i = 0; i < count && i < 2; ++i) {
-    n->lower[i][0] = bounds[i]->lower_x, n->lower[i][1] = bounds[i]->lower_y, n->lower[i][2] = bounds[i]->lower_z;
-    n->upper[i][0] = bounds[i]->upper_x, n->upper[i][1] = bounds[i]->upper_y, n->upper[i][2] = bounds[i]->upper_z;
-  }
-}
-
-void* create_leaf(RTCThreadLocalAllocator allocator, const RTCBuildPrimitive* primitives, size_t count, void*) {
-  auto* ids = static_cast<std::uint32_t*>(rtcThreadLocalAlloc(allocator, count * sizeof(std::uint32_t), 16));
-  for (size_t i = 0; i < count; ++i) ids[i] = primitives[i].primID;
-  void* memory = rtcThreadLocalAlloc(allocator, sizeof(Node), 16);
-  Node* leaf = new (memory) Node();
-  leaf->leaf = true;
-  leaf->count = static_cast<std::uint32_t>(count);
-  leaf->ids = ids;
-  return leaf;
-}
+using Node = BinaryBvhNode;
 
 // Entry parameter of the segment o + t d into the box over (tnear, tfar), or +inf.
 double box_entry(const float lower[3], const float upper[3], const Vertex& o, const Vertex& inverse, double tfar) {
@@ -80,22 +46,7 @@ struct CountingBvh::Impl {
   void build(std::vector<RTCBuildPrimitive> primitives) {
     if (primitives.empty()) return;
     bvh = rtcNewBVH(device.get());
-    RTCBuildArguments args = rtcDefaultBuildArguments();
-    args.buildQuality = RTC_BUILD_QUALITY_MEDIUM;
-    args.maxBranchingFactor = 2;
-    args.maxLeafSize = 4;
-    args.bvh = bvh;
-    args.primitiveCount = primitives.size();
-    primitives.reserve(primitives.size() * 2);  // room for spatial splits (none requested)
-    args.primitives = primitives.data();
-    args.primitiveArrayCapacity = primitives.capacity();
-    args.createNode = create_node;
-    args.setNodeChildren = set_children;
-    args.setNodeBounds = set_bounds;
-    args.createLeaf = create_leaf;
-    root = static_cast<const Node*>(rtcBuildBVH(&args));
-    device.throw_if_failed();
-    if (!root) throw Error("Embree could not build a BVH");
+    root = build_binary_bvh(device, bvh, std::move(primitives), RTC_BUILD_QUALITY_MEDIUM);
   }
 
   bool primitive_blocks(std::uint32_t id, const Vertex& o, const Vertex& d) const {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <new>
 #include <utility>
 
 #include "visproxy/core/errors.h"
@@ -57,6 +58,60 @@ void sphere_intersect(const RTCIntersectFunctionNArguments*) {}
 
 }  // namespace
 
+namespace {
+
+void* create_node(RTCThreadLocalAllocator allocator, unsigned int, void*) {
+  void* memory = rtcThreadLocalAlloc(allocator, sizeof(BinaryBvhNode), 16);
+  return new (memory) BinaryBvhNode();
+}
+
+void set_children(void* node, void** children, unsigned int count, void*) {
+  for (unsigned i = 0; i < count && i < 2; ++i)
+    static_cast<BinaryBvhNode*>(node)->children[i] = static_cast<BinaryBvhNode*>(children[i]);
+}
+
+void set_bounds(void* node, const RTCBounds** bounds, unsigned int count, void*) {
+  auto* n = static_cast<BinaryBvhNode*>(node);
+  for (unsigned i = 0; i < count && i < 2; ++i) {
+    n->lower[i][0] = bounds[i]->lower_x, n->lower[i][1] = bounds[i]->lower_y, n->lower[i][2] = bounds[i]->lower_z;
+    n->upper[i][0] = bounds[i]->upper_x, n->upper[i][1] = bounds[i]->upper_y, n->upper[i][2] = bounds[i]->upper_z;
+  }
+}
+
+void* create_leaf(RTCThreadLocalAllocator allocator, const RTCBuildPrimitive* primitives, size_t count, void*) {
+  auto* ids = static_cast<std::uint32_t*>(rtcThreadLocalAlloc(allocator, count * sizeof(std::uint32_t), 16));
+  for (size_t i = 0; i < count; ++i) ids[i] = primitives[i].primID;
+  void* memory = rtcThreadLocalAlloc(allocator, sizeof(BinaryBvhNode), 16);
+  BinaryBvhNode* leaf = new (memory) BinaryBvhNode();
+  leaf->leaf = true;
+  leaf->count = static_cast<std::uint32_t>(count);
+  leaf->ids = ids;
+  return leaf;
+}
+
+}  // namespace
+
+const BinaryBvhNode* build_binary_bvh(EmbreeDevice& device, RTCBVH bvh, std::vector<RTCBuildPrimitive> primitives,
+                                      RTCBuildQuality quality) {
+  if (primitives.empty()) return nullptr;
+  RTCBuildArguments args = rtcDefaultBuildArguments();
+  args.buildQuality = quality;
+  args.maxBranchingFactor = 2;
+  args.maxLeafSize = 4;
+  args.bvh = bvh;
+  args.primitiveCount = primitives.size();
+  args.primitives = primitives.data();
+  args.primitiveArrayCapacity = primitives.capacity();
+  args.createNode = create_node;
+  args.setNodeChildren = set_children;
+  args.setNodeBounds = set_bounds;
+  args.createLeaf = create_leaf;
+  const auto* root = static_cast<const BinaryBvhNode*>(rtcBuildBVH(&args));
+  device.throw_if_failed();
+  if (!root) throw Error("Embree could not build a BVH");
+  return root;
+}
+
 float round_down(double value) {
   const auto rounded = static_cast<float>(value);
   return static_cast<double>(rounded) <= value ? rounded : std::nextafter(rounded, -std::numeric_limits<float>::infinity());
@@ -86,6 +141,8 @@ bool segment_meets_ball(const Sphere& sphere, const Vertex& origin, const Vertex
 
 EmbreeDevice::EmbreeDevice() {
   device_ = rtcNewDevice(nullptr);
+  // Out of memory is reported as such, so that callers name the step that ran out.
+  if (!device_ && rtcGetDeviceError(nullptr) == RTC_ERROR_OUT_OF_MEMORY) throw std::bad_alloc();
   if (!device_) throw Error("Embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
   rtcSetDeviceErrorFunction(device_, record, &errors_);
 }
@@ -97,12 +154,15 @@ EmbreeDevice::~EmbreeDevice() {
 void EmbreeDevice::record(void* user, RTCError code, const char* text) {
   auto* state = static_cast<ErrorState*>(user);
   std::lock_guard lock(state->mutex);
-  if (state->message.empty())
+  if (state->message.empty()) {
+    state->code = code;
     state->message = "Embree error " + std::to_string(static_cast<int>(code)) + ": " + (text ? text : "");
+  }
 }
 
 void EmbreeDevice::throw_if_failed() {
   std::lock_guard lock(errors_.mutex);
+  if (errors_.code == RTC_ERROR_OUT_OF_MEMORY) throw std::bad_alloc();
   if (!errors_.message.empty()) throw Error(errors_.message);
 }
 
