@@ -12,12 +12,25 @@ namespace visproxy {
 
 namespace {
 
-double segment_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b) {
+Vertex segment_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b) {
   const Vertex ab = b - a;
   const double length2 = ab.squaredNorm();
-  if (!(length2 > 0)) return (p - a).squaredNorm();
+  if (!(length2 > 0)) return a;
   const double t = std::clamp((p - a).dot(ab) / length2, 0.0, 1.0);
-  return (p - (a + t * ab)).squaredNorm();
+  return a + t * ab;
+}
+
+double segment_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b) {
+  return (p - segment_nearest_point(p, a, b)).squaredNorm();
+}
+
+// Of the candidate points, the one nearest to p (the first among equals).
+template <std::size_t N>
+Vertex nearest_of(const Vertex& p, const std::array<Vertex, N>& candidates) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < N; ++i)
+    if ((p - candidates[i]).squaredNorm() < (p - candidates[best]).squaredNorm()) best = i;
+  return candidates[best];
 }
 
 }  // namespace
@@ -52,6 +65,31 @@ double point_triangle_squared_distance(const Vertex& p, const Vertex& a, const V
   const double inside = (p - nearest).squaredNorm();
   return std::min({inside, segment_squared_distance(p, a, b), segment_squared_distance(p, b, c),
                    segment_squared_distance(p, a, c)});
+}
+
+Vertex point_triangle_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c) {
+  // The same regions as point_triangle_squared_distance.
+  const Vertex ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vertex bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const Vertex cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return segment_nearest_point(p, a, b);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return segment_nearest_point(p, a, c);
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return segment_nearest_point(p, b, c);
+  const std::array<Vertex, 3> sides = {segment_nearest_point(p, a, b), segment_nearest_point(p, b, c),
+                                       segment_nearest_point(p, a, c)};
+  const double sum = va + vb + vc;
+  if (!(std::abs(sum) > 0) || !std::isfinite(sum)) return nearest_of(p, sides);
+  const double v = vb / sum, w = vc / sum;
+  return nearest_of(p, std::array<Vertex, 4>{a + v * ab + w * ac, sides[0], sides[1], sides[2]});
 }
 
 struct TriangleDistance::Impl {

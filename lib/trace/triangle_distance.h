@@ -16,6 +16,10 @@ namespace visproxy {
 /// collinear corners is measured as the segments it spans.
 double point_triangle_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c);
 
+/// The point of the closed triangle (a, b, c) nearest to p, in double precision; for a
+/// triangle with collinear corners, the nearest point of the segments they span.
+Vertex point_triangle_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c);
+
 /// The triangles `triangles` (indices into mesh.triangles) of `mesh` in a BVH (Embree user
 /// geometry; built in parallel). The mesh must outlive it and not change. Queries are
 /// const and may run on several threads at once.

@@ -45,6 +45,36 @@ TEST(PointTriangleDistance, EveryRegionOfTheTriangle) {
   EXPECT_DOUBLE_EQ(point_triangle_squared_distance({6, 0, 0}, a, a, {4, 0, 0}), 4.0);
 }
 
+// The nearest point lies on the triangle, at the distance point_triangle_squared_distance
+// gives, for points beyond each corner, beside each side and above the inside, and on
+// triangles with collinear or equal corners.
+TEST(PointTriangleDistance, NearestPointIsOnTheTriangleAtTheDistance) {
+  const Vertex a(0, 0, 0), b(2, 0, 0), c(0, 2, 0);
+  EXPECT_EQ(point_triangle_nearest_point({0.5, 0.5, 3}, a, b, c), Vertex(0.5, 0.5, 0));
+  EXPECT_EQ(point_triangle_nearest_point({-1, -1, 0}, a, b, c), a);
+  EXPECT_EQ(point_triangle_nearest_point({3, 0, 1}, a, b, c), b);
+  EXPECT_EQ(point_triangle_nearest_point({1, -2, 0}, a, b, c), Vertex(1, 0, 0));
+  EXPECT_EQ(point_triangle_nearest_point({-3, 1, 0}, a, b, c), Vertex(0, 1, 0));
+  EXPECT_TRUE(point_triangle_nearest_point({2, 2, 0}, a, b, c).isApprox(Vertex(1, 1, 0), 1e-15));
+  EXPECT_EQ(point_triangle_nearest_point({1, 1, 0}, a, b, {4, 0, 0}), Vertex(1, 0, 0));  // collinear
+  EXPECT_EQ(point_triangle_nearest_point({6, 0, 0}, a, a, {4, 0, 0}), Vertex(4, 0, 0));
+  EXPECT_EQ(point_triangle_nearest_point({6, 1, 0}, a, a, a), a);
+  Random random(3);
+  for (int i = 0; i < 1000; ++i) {
+    auto any_point = [&] { return Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5); };
+    const Vertex u = any_point(), v = any_point(), w = any_point(), p = 3 * any_point();
+    const Vertex q = point_triangle_nearest_point(p, u, v, w);
+    EXPECT_NEAR((p - q).squaredNorm(), point_triangle_squared_distance(p, u, v, w), 1e-12) << i;
+    // On the triangle: in its plane, with barycentric coordinates in [0, 1].
+    const Vertex n = (v - u).cross(w - u);
+    EXPECT_NEAR(n.normalized().dot(q - u), 0.0, 1e-12) << i;
+    const double area = n.norm();
+    const double alpha = (v - q).cross(w - q).norm() / area, beta = (w - q).cross(u - q).norm() / area,
+                 gamma = (u - q).cross(v - q).norm() / area;
+    EXPECT_NEAR(alpha + beta + gamma, 1.0, 1e-9) << i;
+  }
+}
+
 // Points near the surface (jittered vertices), inside, and far outside, on bunny00 where it
 // lies and moved 10^6 away, and on a copy shrunk to 10^-6 of its size 10^3 from the origin.
 TEST(TriangleDistance, FindsTheNearestTriangleOfAScanAnywhere) {
