@@ -1,9 +1,14 @@
 // Alpha wrapping with CGAL 5.5's Alpha_wrap_3:
 //   C. Portaneri, M. Rouxel-Labbé, M. Hemmer, D. Cohen-Steiner, P. Alliez,
 //   "Alpha Wrapping with an Offset", ACM Transactions on Graphics 41(4), 2022.
-// The input goes in as a triangle soup. CGAL's soup oracle skips triangles with collinear
-// corners, so those go in as segments (or points) through CGAL's stacked oracles, and the
-// wrap encloses every point of every input triangle.
+// CGAL's wrapper asks an oracle about the input: does a tetrahedron or a ball meet it, which
+// point of it is nearest, where does a segment enter its offset. CGAL's own oracles build an
+// AABB tree over the triangles on one thread (plus a kd-tree of hints and split copies of
+// long triangles); the oracle here answers from a BVH over triangle indices built by
+// Embree's builder in parallel (trace/triangle_box_tree.h), deciding every intersection
+// with the same exact predicates as CGAL's traversal (its Alpha_wrap_AABB_traits), on nodes
+// and triangles alike, and nearest points in double precision. Triangles with collinear corners are the segments or points they span, in a
+// second, small BVH, so the wrap encloses every point of every input triangle.
 
 #include "visproxy/proxy/alpha_wrap.h"
 
@@ -11,27 +16,24 @@
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/alpha_wrap_3.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/proxy/triangle_soup.h"
+#include "visproxy/trace/triangle_box_tree.h"
 
 namespace visproxy {
 namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
-using CgalSegment = Kernel::Segment_3;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
-
-// Triangles, then segments, then points: each oracle answers for its own primitives and
-// asks the one below it for the rest.
-using PointOracle = CGAL::Alpha_wraps_3::internal::Point_set_oracle<Kernel>;
-using SegmentOracle = CGAL::Alpha_wraps_3::internal::Segment_soup_oracle<Kernel, PointOracle>;
-using SoupOracle = CGAL::Alpha_wraps_3::internal::Triangle_soup_oracle<Kernel, SegmentOracle>;
-using Wrapper = CGAL::Alpha_wraps_3::internal::Alpha_wrap_3<SoupOracle>;
 
 void require_positive(double value, const char* name) {
   if (!(std::isfinite(value) && value > 0))
@@ -40,6 +42,114 @@ void require_positive(double value, const char* name) {
 }
 
 Point point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
+Vertex vertex(const Point& p) { return {p.x(), p.y(), p.z()}; }
+
+// The input as CGAL's Alpha_wrap_3 asks about it (the interface of its AABB_tree_oracle).
+class BvhOracle {
+ public:
+  using Geom_traits = CGAL::Alpha_wraps_3::internal::Alpha_wrap_AABB_traits<Kernel>;
+  using FT = Kernel::FT;
+
+  explicit BvhOracle(const TriangleMesh& mesh) : mesh_(mesh) {
+    SoupPrimitives primitives = soup_primitives(mesh);
+    // Segments as triangles (a, b, b), points as (p, p, p).
+    for (const auto& [from, to] : primitives.segments) {
+      const auto first = static_cast<VertexIndex>(degenerate_.positions.size());
+      degenerate_.positions.push_back(from);
+      degenerate_.positions.push_back(to);
+      degenerate_.triangles.push_back({first, first + 1, first + 1});
+    }
+    for (const Vertex& p : primitives.points) {
+      const auto index = static_cast<VertexIndex>(degenerate_.positions.size());
+      degenerate_.positions.push_back(p);
+      degenerate_.triangles.push_back({index, index, index});
+    }
+    BoundingBox box;
+    for (const std::uint32_t t : primitives.triangle_indices)
+      for (const VertexIndex v : mesh.triangles[t]) box.extend(mesh.positions[v]);
+    for (const Vertex& p : degenerate_.positions) box.extend(p);
+    bbox_ = CGAL::Bbox_3(box.min.x(), box.min.y(), box.min.z(), box.max.x(), box.max.y(), box.max.z());
+    primitives.triangles = {};
+    triangles_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
+    std::vector<std::uint32_t> all(degenerate_.triangles.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+    if (!all.empty()) degenerates_ = std::make_unique<TriangleBoxTree>(degenerate_, std::move(all));
+  }
+
+  const Geom_traits& geom_traits() const { return traits_; }
+  CGAL::Bbox_3 bbox() const { return bbox_; }
+  bool empty() const { return false; }
+  bool do_call() const { return true; }
+
+  /// Does the query (a tetrahedron with its outside facets, or a ball) meet the input?
+  template <typename Query>
+  bool do_intersect(const Query& query) const {
+    const auto meets = traits_.do_intersect_3_object();
+    const auto may_meet = [&](const BoundingBox& box) {
+      return meets(query, CGAL::Bbox_3(box.min.x(), box.min.y(), box.min.z(), box.max.x(), box.max.y(), box.max.z()));
+    };
+    if (triangles_->any(may_meet, [&](std::uint32_t t) {
+          const Triangle& corners = mesh_.triangles[t];
+          return meets(query, Kernel::Triangle_3(point(mesh_.positions[corners[0]]), point(mesh_.positions[corners[1]]),
+                                                  point(mesh_.positions[corners[2]])));
+        }))
+      return true;
+    return degenerates_ && degenerates_->any(may_meet, [&](std::uint32_t t) {
+             const Triangle& corners = degenerate_.triangles[t];
+             const Point from = point(degenerate_.positions[corners[0]]);
+             if (corners[0] == corners[1]) return meets(query, from);
+             return meets(query, Kernel::Segment_3(from, point(degenerate_.positions[corners[1]])));
+           });
+  }
+
+  /// The nearest input point: the nearest triangle found in double precision, then CGAL's
+  /// projection onto it, as CGAL's own oracle computes it.
+  Point closest_point(const Point& p) const {
+    const Vertex q = vertex(p);
+    const TriangleBoxTree::Nearest nearest = triangles_->nearest(q);
+    const auto project = traits_.construct_projected_point_3_object();
+    if (degenerates_) {
+      const TriangleBoxTree::Nearest other = degenerates_->nearest(q);
+      if (other.squared_distance < nearest.squared_distance) {
+        const Triangle& corners = degenerate_.triangles[other.triangle];
+        const Point from = point(degenerate_.positions[corners[0]]);
+        if (corners[0] == corners[1]) return from;
+        return project(Kernel::Segment_3(from, point(degenerate_.positions[corners[1]])), p);
+      }
+    }
+    const Triangle& corners = mesh_.triangles[nearest.triangle];
+    return project(Kernel::Triangle_3(point(mesh_.positions[corners[0]]), point(mesh_.positions[corners[1]]),
+                                      point(mesh_.positions[corners[2]])),
+                   p);
+  }
+
+  FT squared_distance(const Point& p) const { return CGAL::squared_distance(p, closest_point(p)); }
+
+  bool first_intersection(const Point& p, const Point& q, Point& o, const FT offset_size,
+                          const FT intersection_precision) const {
+    CGAL::Alpha_wraps_3::internal::Offset_intersection<Geom_traits, Distance> offset_intersection(
+        Distance{this}, offset_size, intersection_precision, 1 /* Lipschitz constant */);
+    return offset_intersection.first_intersection(p, q, o);
+  }
+
+  bool first_intersection(const Point& p, const Point& q, Point& o, const FT offset_size) const {
+    return first_intersection(p, q, o, offset_size, 1e-2 * offset_size);
+  }
+
+ private:
+  struct Distance {
+    const BvhOracle* oracle;
+    FT operator()(const Point& p) const { return std::sqrt(oracle->squared_distance(p)); }
+  };
+
+  const TriangleMesh& mesh_;
+  TriangleMesh degenerate_;
+  Geom_traits traits_;
+  CGAL::Bbox_3 bbox_;
+  std::unique_ptr<TriangleBoxTree> triangles_, degenerates_;
+};
+
+using Wrapper = CGAL::Alpha_wraps_3::internal::Alpha_wrap_3<BvhOracle>;
 
 }  // namespace
 
@@ -61,20 +171,7 @@ AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOption
   result.alpha_world = options.alpha_relative * diagonal;
   result.offset_world = options.offset_relative * diagonal;
 
-  std::vector<Point> points;
-  points.reserve(mesh.positions.size());
-  for (const Vertex& p : mesh.positions) points.push_back(point(p));
-  const SoupPrimitives primitives = soup_primitives(mesh);
-  std::vector<CgalSegment> segments;
-  for (const auto& [from, to] : primitives.segments) segments.emplace_back(point(from), point(to));
-  std::vector<Point> lone_points;
-  for (const Vertex& p : primitives.points) lone_points.push_back(point(p));
-
-  SoupOracle oracle(result.alpha_world, SegmentOracle(PointOracle(Kernel()), Kernel()), Kernel());
-  oracle.add_triangle_soup(points, primitives.triangles);
-  if (!segments.empty()) oracle.add_segment_soup(segments);
-  if (!lone_points.empty()) oracle.add_point_set(lone_points);
-
+  const BvhOracle oracle(mesh);
   SurfaceMesh wrap;
   Wrapper wrapper(oracle);
   wrapper(result.alpha_world, result.offset_world, wrap);

@@ -7,7 +7,8 @@ namespace visproxy {
 SoupPrimitives soup_primitives(const TriangleMesh& mesh) {
   using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
   SoupPrimitives result;
-  for (const Triangle& t : mesh.triangles) {
+  for (std::uint32_t index = 0; index < mesh.triangles.size(); ++index) {
+    const Triangle& t = mesh.triangles[index];
     const Vertex& a = mesh.positions[t[0]];
     const Vertex& b = mesh.positions[t[1]];
     const Vertex& c = mesh.positions[t[2]];
@@ -16,6 +17,7 @@ SoupPrimitives soup_primitives(const TriangleMesh& mesh) {
     const Point pc(c.x(), c.y(), c.z());
     if (!CGAL::collinear(pa, pb, pc)) {
       result.triangles.push_back(t);
+      result.triangle_indices.push_back(index);
     } else if (pa == pb && pb == pc) {
       result.points.push_back(a);
     } else if (CGAL::collinear_are_ordered_along_line(pa, pb, pc)) {  // b between a and c

@@ -2,6 +2,7 @@
 // The point sets that the triangles of a soup stand for: triangles with collinear corners
 // are segments or points, and the proxy builders must enclose those too.
 
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -11,6 +12,7 @@ namespace visproxy {
 
 struct SoupPrimitives {
   std::vector<Triangle> triangles;                  ///< triangles with non-collinear corners
+  std::vector<std::uint32_t> triangle_indices;      ///< their indices in mesh.triangles
   std::vector<std::pair<Vertex, Vertex>> segments;  ///< collinear corners: the two extreme ones
   std::vector<Vertex> points;                       ///< three equal corners
 };

@@ -6,6 +6,8 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 
+#include <tbb/task_arena.h>
+
 #include <cmath>
 #include <limits>
 
@@ -116,6 +118,25 @@ TEST(AlphaWrap, IsDeterministic) {
   const TriangleMesh mesh = read_mesh(testing::cgal_mesh("elephant-with-holes.off"));
   const AlphaWrapOptions options{.alpha_relative = 1.0 / 15, .offset_relative = 1.0 / 200};
   EXPECT_EQ(build_alpha_wrap(mesh, options).mesh, build_alpha_wrap(mesh, options).mesh);
+}
+
+// The input's BVH is built in parallel, so its shape may follow the threads; the answers
+// the wrap asks of it (exact intersections, nearest points with a tie rule) must not.
+TEST(AlphaWrap, DoesNotDependOnTheNumberOfThreads) {
+  const TriangleMesh mesh = read_mesh(testing::cgal_mesh("knot1.off"));
+  const AlphaWrapOptions options{.alpha_relative = 1.0 / 15, .offset_relative = 1.0 / 200};
+  AlphaWrapResult one, three;
+  tbb::task_arena(1).execute([&] { one = build_alpha_wrap(mesh, options); });
+  tbb::task_arena(3).execute([&] { three = build_alpha_wrap(mesh, options); });
+  EXPECT_EQ(one.mesh, three.mesh);
+}
+
+// 10^6 from the origin the input's coordinates need double precision: the BVH's boxes,
+// held in single precision about the input's centre, must still hold every triangle.
+TEST(AlphaWrap, FarFromTheOriginIsConservative) {
+  TriangleMesh mesh = read_mesh(testing::cgal_mesh("knot1.off"));
+  for (Vertex& p : mesh.positions) p += Vertex(1e6, -2e6, 5e5);
+  expect_conservative_outside_proxy(mesh, build_alpha_wrap(mesh, {.alpha_relative = 1.0 / 10, .offset_relative = 1.0 / 100}).mesh);
 }
 
 TEST(AlphaWrap, RejectsOptionsThatAreNotPositiveFiniteNumbers) {
