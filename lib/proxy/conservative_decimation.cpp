@@ -17,7 +17,7 @@
 // it is made (a change replaces a disk of triangles, the "old star", by a fan around one
 // vertex):
 //   (a) the link condition, so the surface stays a closed 2-manifold;
-//   (b) no new triangle meets an input triangle (AABB tree, exact do_intersect). Shortcut:
+//   (b) no new triangle meets an input triangle (BVH, exact do_intersect). Shortcut:
 //       when the fan meets the old star only along their common boundary, the open fan is
 //       disjoint from the surface and connected, so it lies wholly on one side of it; the
 //       two triangles at one boundary edge tell which, exactly, and a fan on the side away
@@ -35,8 +35,8 @@
 
 #include <CGAL/AABB_segment_primitive.h>
 #include <CGAL/AABB_traits.h>
-#include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/AABB_tree.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/intersections.h>
@@ -64,6 +64,7 @@
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/proxy/triangle_soup.h"
+#include "visproxy/trace/triangle_box_tree.h"
 
 namespace visproxy::detail {
 namespace {
@@ -73,51 +74,10 @@ using Point = Kernel::Point_3;
 using CgalTriangle = Kernel::Triangle_3;
 using CgalSegment = Kernel::Segment_3;
 using TrianglePrimitive = CGAL::AABB_triangle_primitive<Kernel, std::vector<CgalTriangle>::const_iterator>;
-using TriangleTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, TrianglePrimitive>>;
+using TriangleTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, TrianglePrimitive>>;  // over a surface's triangles
 using SegmentPrimitive = CGAL::AABB_segment_primitive<Kernel, std::vector<CgalSegment>::const_iterator>;
 using SegmentTree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, SegmentPrimitive>>;
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
-
-// A traversal of a triangle tree that descends by plain bounding-box overlap (the boxes are
-// exact: unions of the triangles' double coordinates) and hands each triangle whose box
-// overlaps the query's to `f`, until f returns true. Cheaper than the tree's own queries,
-// which test a triangle or a box against every node with filtered exact predicates.
-template <typename F>
-class BoxOverlapTraversal {
- public:
-  explicit BoxOverlapTraversal(F& f) : f_(f) {}
-  bool go_further() const { return !found_; }
-  void intersection(const CGAL::Bbox_3& query, const TrianglePrimitive& primitive) {
-    const CgalTriangle& t = primitive.datum();
-    if (overlaps(query, t) && f_(t)) found_ = true;
-  }
-  template <typename Node>
-  bool do_intersect(const CGAL::Bbox_3& query, const Node& node) const {
-    return CGAL::do_overlap(query, node.bbox());
-  }
-  bool found() const { return found_; }
-
- private:
-  // The triangle's box against the query's, from its double coordinates directly.
-  static bool overlaps(const CGAL::Bbox_3& query, const CgalTriangle& t) {
-    for (int k = 0; k < 3; ++k) {
-      const double a = t.vertex(0)[k], b = t.vertex(1)[k], c = t.vertex(2)[k];
-      if (std::max({a, b, c}) < query.min(k) || std::min({a, b, c}) > query.max(k)) return false;
-    }
-    return true;
-  }
-  F& f_;
-  bool found_ = false;
-};
-
-// Whether f(t) holds for some input triangle t whose box overlaps `query`.
-template <typename F>
-bool any_overlapping(const TriangleTree& tree, const CGAL::Bbox_3& query, F f) {
-  if (tree.empty()) return false;
-  BoxOverlapTraversal<F> traversal(f);
-  tree.traversal(query, traversal);
-  return traversal.found();
-}
 
 Point to_point(const Vertex& p) { return {p.x(), p.y(), p.z()}; }
 
@@ -209,15 +169,12 @@ std::optional<bool> inside_by_parity(const Point& x, double reach, Random& direc
 
 class InputGeometry {
  public:
-  explicit InputGeometry(const TriangleMesh& mesh) {
-    const SoupPrimitives primitives = soup_primitives(mesh);
-    for (const Triangle& t : primitives.triangles)
-      triangles_.emplace_back(to_point(mesh.positions[t[0]]), to_point(mesh.positions[t[1]]),
-                              to_point(mesh.positions[t[2]]));
+  explicit InputGeometry(const TriangleMesh& mesh) : mesh_(mesh) {
+    SoupPrimitives primitives = soup_primitives(mesh);
     for (const auto& [from, to] : primitives.segments) segments_.emplace_back(to_point(from), to_point(to));
     for (const Vertex& p : primitives.points) points_.push_back(to_point(p));
-    triangle_tree_.insert(triangles_.begin(), triangles_.end());
-    triangle_tree_.build();
+    primitives.triangles = {};
+    triangle_tree_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
     if (!segments_.empty()) {
       segment_tree_.insert(segments_.begin(), segments_.end());
       segment_tree_.build();
@@ -239,8 +196,7 @@ class InputGeometry {
 
   /// Does the closed triangle meet any input triangle (or degenerate triangle)?
   bool meets(const CgalTriangle& t) const {
-    if (any_overlapping(triangle_tree_, t.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); }))
-      return true;
+    if (any_overlapping(t.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); })) return true;
     if (!segments_.empty() && segment_tree_.do_intersect(t)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(t, p)) return true;
@@ -251,8 +207,7 @@ class InputGeometry {
   /// that is a point is reported as meeting.
   bool meets_segment(const CgalSegment& s) const {
     if (s.is_degenerate()) return true;  // a point: counted as meeting, which only costs the caller a retry
-    if (any_overlapping(triangle_tree_, s.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(s, u); }))
-      return true;
+    if (any_overlapping(s.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(s, u); })) return true;
     if (!segments_.empty() && segment_tree_.do_intersect(s)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(s, p)) return true;
@@ -294,7 +249,7 @@ class InputGeometry {
             return true;
       return false;
     };
-    if (any_overlapping(triangle_tree_, query, close_to_triangle)) return true;
+    if (any_overlapping(query, close_to_triangle)) return true;
     std::vector<SegmentPrimitive::Id> segment_hits;  // (const and safe to call from several threads)
     if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(segment_hits));
     for (const auto& id : segment_hits) {  // degenerate input triangles
@@ -313,7 +268,7 @@ class InputGeometry {
 
   double distance(const Point& p) const {
     double squared = std::numeric_limits<double>::infinity();
-    if (!triangles_.empty()) squared = std::min(squared, CGAL::to_double(triangle_tree_.squared_distance(p)));
+    squared = std::min(squared, triangle_tree_->nearest(Vertex(p.x(), p.y(), p.z())).squared_distance);
     if (!segments_.empty()) squared = std::min(squared, CGAL::to_double(segment_tree_.squared_distance(p)));
     for (const Point& q : points_) squared = std::min(squared, CGAL::to_double(CGAL::squared_distance(p, q)));
     return std::sqrt(squared);
@@ -337,6 +292,24 @@ class InputGeometry {
   }
 
  private:
+  // Whether f(u) holds for some input triangle u whose box overlaps `query` (plain box
+  // overlap down the tree, whose boxes hold the triangles' double coordinates).
+  template <typename F>
+  bool any_overlapping(const CGAL::Bbox_3& query, F f) const {
+    const BoundingBox box{{query.xmin(), query.ymin(), query.zmin()}, {query.xmax(), query.ymax(), query.zmax()}};
+    return triangle_tree_->any([&](const BoundingBox& node) { return boxes_overlap(node, box); },
+                               [&](std::uint32_t index) {
+                                 const Triangle& t = mesh_.triangles[index];
+                                 const std::array<const Vertex*, 3> c = {&mesh_.positions[t[0]], &mesh_.positions[t[1]],
+                                                                         &mesh_.positions[t[2]]};
+                                 for (int k = 0; k < 3; ++k)
+                                   if (std::max({(*c[0])[k], (*c[1])[k], (*c[2])[k]}) < box.min[k] ||
+                                       std::min({(*c[0])[k], (*c[1])[k], (*c[2])[k]}) > box.max[k])
+                                     return false;
+                                 return f(CgalTriangle(to_point(*c[0]), to_point(*c[1]), to_point(*c[2])));
+                               });
+  }
+
   std::array<int, 3> cell_of(const Vertex& p) const {
     std::array<int, 3> cell{};
     for (int k = 0; k < 3; ++k) {
@@ -370,10 +343,10 @@ class InputGeometry {
       cell_items_[fill[cell_of_item[i]]++] = static_cast<std::uint32_t>(i);
   }
 
-  std::vector<CgalTriangle> triangles_;
+  const TriangleMesh& mesh_;
+  std::unique_ptr<TriangleBoxTree> triangle_tree_;  // the triangles with non-collinear corners
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
-  TriangleTree triangle_tree_;
   SegmentTree segment_tree_;
   std::vector<Vertex> representatives_;
   BoundingBox grid_box_;

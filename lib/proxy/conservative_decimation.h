@@ -18,7 +18,7 @@ enum class InputSide {
 };
 
 /// The input of a conservative surface: its triangles (exact intersection tests), one point
-/// per connected component (side tests) and distance queries.
+/// per connected component (side tests) and distance queries. The input must outlive it.
 class ConservativeInput {
  public:
   explicit ConservativeInput(const TriangleMesh& input);
@@ -39,7 +39,7 @@ class ConservativeInput {
   /// corners always), in increasing order.
   std::vector<std::size_t> triangles_meeting(const TriangleMesh& surface) const;
 
-  /// Euclidean distance from `p` to the input (double precision, CGAL AABB tree).
+  /// Euclidean distance from `p` to the input (double precision, BVH over its triangles).
   double distance(const Vertex& p) const;
 
   /// An upper bound of the distance from any point of `surface` to the input: the distance
