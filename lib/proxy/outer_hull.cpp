@@ -50,6 +50,10 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
   } else {
     detail::ConservativeDecimator decimator(wrap.mesh, geometry);
     decimator.collapse_edges(options.max_triangles);
+    for (int stage = 0; stage < 3 && decimator.triangle_count() > options.max_triangles; ++stage) {
+      decimator.move_towards_input();
+      decimator.collapse_edges(options.max_triangles);
+    }
     decimator.move_towards_input();
     result.mesh = decimator.result();
   }

@@ -38,8 +38,10 @@ struct OuterHullResult {
 /// the least enclosed volume first, with each merged vertex placed, as in progressive hulls
 /// (Sander, Gu, Gortler, Hoppe, Snyder 2000), on the outer side of the planes of all the
 /// triangles it replaces, at the point that minimises the added volume (a 3-variable LP).
-/// Finally every vertex is moved towards the input (along minus its normal, by at most 90 %
-/// of its distance to the input) where the checks below allow it.
+/// When the collapses stall above the budget (every remaining collapse would fold the mesh
+/// into itself), every vertex is moved towards the input and the collapses resume, up to
+/// three times. Finally every vertex is moved towards the input (along minus its normal, by
+/// at most 90 % of its distance to the input) where the checks below allow it.
 ///
 /// Guarantees, checked with exact predicates (CGAL's filtered kernel) at every step rather
 /// than assumed from the construction:
