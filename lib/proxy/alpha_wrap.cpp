@@ -12,6 +12,7 @@
 
 #include "visproxy/proxy/alpha_wrap.h"
 
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/alpha_wrap_3.h>
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/alpha_wrap_shared.h"
 #include "visproxy/proxy/triangle_soup.h"
 #include "visproxy/trace/triangle_box_tree.h"
 
@@ -50,7 +52,9 @@ class BvhOracle {
   using Geom_traits = CGAL::Alpha_wraps_3::internal::Alpha_wrap_AABB_traits<Kernel>;
   using FT = Kernel::FT;
 
-  explicit BvhOracle(const TriangleMesh& mesh) : mesh_(mesh) {
+  /// Over `shared`, the input's triangles with non-collinear corners, or (nullptr) over a
+  /// BVH of its own.
+  BvhOracle(const TriangleMesh& mesh, const TriangleBoxTree* shared) : mesh_(mesh) {
     SoupPrimitives primitives = soup_primitives(mesh);
     // Segments as triangles (a, b, b), points as (p, p, p).
     for (const auto& [from, to] : primitives.segments) {
@@ -64,13 +68,18 @@ class BvhOracle {
       degenerate_.positions.push_back(p);
       degenerate_.triangles.push_back({index, index, index});
     }
+    // Every corner of every triangle is a point of the input or lies between two.
     BoundingBox box;
-    for (const std::uint32_t t : primitives.triangle_indices)
-      for (const VertexIndex v : mesh.triangles[t]) box.extend(mesh.positions[v]);
-    for (const Vertex& p : degenerate_.positions) box.extend(p);
+    for (const Triangle& t : mesh.triangles)
+      for (const VertexIndex v : t) box.extend(mesh.positions[v]);
     bbox_ = CGAL::Bbox_3(box.min.x(), box.min.y(), box.min.z(), box.max.x(), box.max.y(), box.max.z());
     primitives.triangles = {};
-    triangles_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
+    if (shared) {
+      triangles_ = shared;
+    } else {
+      own_triangles_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
+      triangles_ = own_triangles_.get();
+    }
     std::vector<std::uint32_t> all(degenerate_.triangles.size());
     for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
     if (!all.empty()) degenerates_ = std::make_unique<TriangleBoxTree>(degenerate_, std::move(all));
@@ -146,32 +155,24 @@ class BvhOracle {
   TriangleMesh degenerate_;
   Geom_traits traits_;
   CGAL::Bbox_3 bbox_;
-  std::unique_ptr<TriangleBoxTree> triangles_, degenerates_;
+  std::unique_ptr<TriangleBoxTree> own_triangles_;
+  const TriangleBoxTree* triangles_ = nullptr;
+  std::unique_ptr<TriangleBoxTree> degenerates_;
 };
 
 using Wrapper = CGAL::Alpha_wraps_3::internal::Alpha_wrap_3<BvhOracle>;
 
 }  // namespace
 
-AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOptions& options) {
-  require_positive(options.alpha_relative, "alpha_relative");
-  require_positive(options.offset_relative, "offset_relative");
-  if (mesh.triangles.empty()) throw InvalidInputError("", "alpha wrap: the mesh has no triangle");
-  for (const Triangle& triangle : mesh.triangles)
-    for (const VertexIndex v : triangle) {
-      if (v >= mesh.positions.size())
-        throw InvalidInputError("", "alpha wrap: vertex index " + std::to_string(v) + " is out of range");
-      if (!mesh.positions[v].allFinite())
-        throw InvalidInputError("", "alpha wrap: vertex " + std::to_string(v) + " has a non-finite coordinate");
-    }
-  const double diagonal = bounding_box(mesh).diagonal();
-  if (!(diagonal > 0)) throw InvalidInputError("", "alpha wrap: all triangles are one point (zero diagonal)");
+namespace {
 
+AlphaWrapResult wrap_with(const TriangleMesh& mesh, const AlphaWrapOptions& options, const TriangleBoxTree* shared) {
+  const double diagonal = bounding_box(mesh).diagonal();
   AlphaWrapResult result;
   result.alpha_world = options.alpha_relative * diagonal;
   result.offset_world = options.offset_relative * diagonal;
 
-  const BvhOracle oracle(mesh);
+  const BvhOracle oracle(mesh, shared);
   SurfaceMesh wrap;
   Wrapper wrapper(oracle);
   wrapper(result.alpha_world, result.offset_world, wrap);
@@ -193,6 +194,37 @@ AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOption
     result.mesh.triangles.push_back(triangle);
   }
   return result;
+}
+
+}  // namespace
+
+namespace detail {
+
+void check_alpha_wrap_input(const TriangleMesh& mesh, const AlphaWrapOptions& options) {
+  require_positive(options.alpha_relative, "alpha_relative");
+  require_positive(options.offset_relative, "offset_relative");
+  if (mesh.triangles.empty()) throw InvalidInputError("", "alpha wrap: the mesh has no triangle");
+  for (const Triangle& triangle : mesh.triangles)
+    for (const VertexIndex v : triangle) {
+      if (v >= mesh.positions.size())
+        throw InvalidInputError("", "alpha wrap: vertex index " + std::to_string(v) + " is out of range");
+      if (!mesh.positions[v].allFinite())
+        throw InvalidInputError("", "alpha wrap: vertex " + std::to_string(v) + " has a non-finite coordinate");
+    }
+  if (!(bounding_box(mesh).diagonal() > 0))
+    throw InvalidInputError("", "alpha wrap: all triangles are one point (zero diagonal)");
+}
+
+AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOptions& options,
+                                 const TriangleBoxTree& triangles) {
+  return wrap_with(mesh, options, &triangles);
+}
+
+}  // namespace detail
+
+AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOptions& options) {
+  detail::check_alpha_wrap_input(mesh, options);
+  return wrap_with(mesh, options, nullptr);
 }
 
 }  // namespace visproxy

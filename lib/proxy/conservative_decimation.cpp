@@ -193,10 +193,13 @@ class InputGeometry {
   }
 
   const std::vector<Vertex>& representatives() const { return representatives_; }
+  const TriangleBoxTree& triangles() const { return *triangle_tree_; }
 
   /// Does the closed triangle meet any input triangle (or degenerate triangle)?
   bool meets(const CgalTriangle& t) const {
-    if (any_overlapping(t.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); })) return true;
+    const auto crosses_node = [&](const CGAL::Bbox_3& node) { return CGAL::do_intersect(t, node); };
+    if (any_overlapping(t.bbox(), crosses_node, [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); }))
+      return true;
     if (!segments_.empty() && segment_tree_.do_intersect(t)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(t, p)) return true;
@@ -207,7 +210,9 @@ class InputGeometry {
   /// that is a point is reported as meeting.
   bool meets_segment(const CgalSegment& s) const {
     if (s.is_degenerate()) return true;  // a point: counted as meeting, which only costs the caller a retry
-    if (any_overlapping(s.bbox(), [&](const CgalTriangle& u) { return CGAL::do_intersect(s, u); })) return true;
+    const auto crosses_node = [&](const CGAL::Bbox_3& node) { return CGAL::do_intersect(s, node); };
+    if (any_overlapping(s.bbox(), crosses_node, [&](const CgalTriangle& u) { return CGAL::do_intersect(s, u); }))
+      return true;
     if (!segments_.empty() && segment_tree_.do_intersect(s)) return true;
     for (const Point& p : points_)
       if (CGAL::do_intersect(s, p)) return true;
@@ -249,7 +254,7 @@ class InputGeometry {
             return true;
       return false;
     };
-    if (any_overlapping(query, close_to_triangle)) return true;
+    if (any_overlapping(query, [](const CGAL::Bbox_3&) { return true; }, close_to_triangle)) return true;
     std::vector<SegmentPrimitive::Id> segment_hits;  // (const and safe to call from several threads)
     if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(segment_hits));
     for (const auto& id : segment_hits) {  // degenerate input triangles
@@ -292,12 +297,17 @@ class InputGeometry {
   }
 
  private:
-  // Whether f(u) holds for some input triangle u whose box overlaps `query` (plain box
-  // overlap down the tree, whose boxes hold the triangles' double coordinates).
-  template <typename F>
-  bool any_overlapping(const CGAL::Bbox_3& query, F f) const {
+  // Whether f(u) holds for some input triangle u whose box overlaps `query`, descending
+  // through the nodes whose boxes (which hold their triangles' double coordinates) overlap
+  // it and pass `may_meet` too: a query shape that misses a node's box misses its triangles.
+  template <typename MayMeet, typename F>
+  bool any_overlapping(const CGAL::Bbox_3& query, MayMeet may_meet, F f) const {
     const BoundingBox box{{query.xmin(), query.ymin(), query.zmin()}, {query.xmax(), query.ymax(), query.zmax()}};
-    return triangle_tree_->any([&](const BoundingBox& node) { return boxes_overlap(node, box); },
+    return triangle_tree_->any([&](const BoundingBox& node) {
+                                 return boxes_overlap(node, box) &&
+                                        may_meet(CGAL::Bbox_3(node.min.x(), node.min.y(), node.min.z(), node.max.x(),
+                                                              node.max.y(), node.max.z()));
+                               },
                                [&](std::uint32_t index) {
                                  const Triangle& t = mesh_.triangles[index];
                                  const std::array<const Vertex*, 3> c = {&mesh_.positions[t[0]], &mesh_.positions[t[1]],
@@ -1207,6 +1217,8 @@ struct ConservativeInput::Impl {
 
 ConservativeInput::ConservativeInput(const TriangleMesh& input) : impl_(std::make_unique<Impl>(input)) {}
 ConservativeInput::~ConservativeInput() = default;
+
+const TriangleBoxTree& ConservativeInput::triangles() const { return impl_->geometry.triangles(); }
 
 bool ConservativeInput::starts_conservative(const TriangleMesh& surface, InputSide side) const {
   return start_is_conservative(surface, impl_->geometry, side);

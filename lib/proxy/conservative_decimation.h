@@ -9,6 +9,10 @@
 
 #include "visproxy/mesh/triangle_mesh.h"
 
+namespace visproxy {
+class TriangleBoxTree;
+}
+
 namespace visproxy::detail {
 
 /// Where the input lies relative to a surface that keeps clear of it.
@@ -38,6 +42,10 @@ class ConservativeInput {
   /// (touching counts; a triangle with collinear corners as its sides, one with equal
   /// corners always), in increasing order.
   std::vector<std::size_t> triangles_meeting(const TriangleMesh& surface) const;
+
+  /// The BVH of the input's triangles with non-collinear corners (soup_primitives'
+  /// triangle_indices), for the alpha wrap that starts an outer hull.
+  const TriangleBoxTree& triangles() const;
 
   /// Euclidean distance from `p` to the input (double precision, BVH over its triangles).
   double distance(const Vertex& p) const;

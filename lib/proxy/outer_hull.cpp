@@ -8,7 +8,7 @@
 #include <string>
 
 #include "visproxy/core/errors.h"
-#include "visproxy/proxy/alpha_wrap.h"
+#include "visproxy/proxy/alpha_wrap_shared.h"
 #include "visproxy/proxy/conservative_decimation.h"
 
 namespace visproxy {
@@ -31,14 +31,16 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
 
   AlphaWrapOptions wrap_options{.alpha_relative = options.wrap_alpha_relative,
                                 .offset_relative = options.wrap_offset_relative};
-  AlphaWrapResult wrap = build_alpha_wrap(input, wrap_options);  // validates the input
+  detail::check_alpha_wrap_input(input, wrap_options);
+  // The input's BVH serves the wrap's queries and then the decimation's checks.
   const detail::ConservativeInput geometry(input);
+  AlphaWrapResult wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles());
   for (int attempt = 1; !geometry.starts_conservative(wrap.mesh, detail::InputSide::inside); ++attempt) {
     if (attempt == 4)
       throw Error("outer hull: the alpha wrap is not a closed, embedded surface clear of the input, even with 8 "
                   "times the offset");
     wrap_options.offset_relative *= 2;
-    wrap = build_alpha_wrap(input, wrap_options);
+    wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles());
   }
 
   OuterHullResult result;
