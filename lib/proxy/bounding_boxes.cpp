@@ -166,46 +166,51 @@ TriangleMesh axis_aligned_box_mesh(const TriangleMesh& mesh) {
   return box_mesh(corners);
 }
 
-namespace {
-
-// Whether every point is inside or on the closed mesh, exactly. A mesh whose every vertex
-// lies on or behind the plane of every triangle, some strictly, is convex, the
-// intersection of those half-spaces: a point is then held when it lies on or behind every plane (a few exact
-// orientations, in parallel). Otherwise, by winding numbers (locate_points).
+// Whether every point is inside or on the closed mesh `box` (outward-oriented), exactly.
+// A point on or behind the plane of every triangle, and strictly behind one, is held: seen
+// from it, every triangle's signed solid angle is zero or positive and one is positive, so
+// its winding number, an integer off the surface, is at least 1. That decides nearly every
+// point with a few exact orientations, in parallel, even when rounding leaves a box's faces
+// slightly bent (two triangles of a face not quite coplanar). The others are located by
+// winding numbers (locate_points); when every vertex of the mesh is on or behind every
+// plane, some strictly (a convex mesh), they are outside without asking.
 bool holds_every_point(const TriangleMesh& box, const std::vector<Vertex>& points) {
   std::vector<std::array<Point, 3>> planes;
   for (const Triangle& t : box.triangles)
     planes.push_back({to_point(box.positions[t[0]]), to_point(box.positions[t[1]]), to_point(box.positions[t[2]])});
-  // (With some vertex strictly behind every plane: a flat box has no inside, and a point
-  // in its plane is not held for being on no plane's front.)
-  const bool convex = std::all_of(planes.begin(), planes.end(), [&](const std::array<Point, 3>& plane) {
-    bool behind = false;
-    for (const Vertex& v : box.positions) {
-      const CGAL::Orientation side = CGAL::orientation(plane[0], plane[1], plane[2], to_point(v));
+  auto behind_every_plane = [&](const Point& p) {
+    bool strictly = false;
+    for (const std::array<Point, 3>& plane : planes) {
+      const CGAL::Orientation side = CGAL::orientation(plane[0], plane[1], plane[2], p);
       if (side == CGAL::POSITIVE) return false;
-      behind = behind || side == CGAL::NEGATIVE;
+      strictly = strictly || side == CGAL::NEGATIVE;
     }
+    return strictly;
+  };
+  const bool convex = std::all_of(box.positions.begin(), box.positions.end(), [&](const Vertex& v) {
+    bool behind = true;  // on or behind every plane (a vertex lies on its own triangles' planes)
+    for (const std::array<Point, 3>& plane : planes)
+      behind = behind && CGAL::orientation(plane[0], plane[1], plane[2], to_point(v)) != CGAL::POSITIVE;
     return behind;
-  });
-  if (!convex) {
-    const std::vector<PointLocation> locations = locate_points(box, points);
-    return std::none_of(locations.begin(), locations.end(), [](PointLocation l) { return l == PointLocation::outside; });
-  }
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, points.size(), 4096), true,
-      [&](const tbb::blocked_range<std::size_t>& range, bool held) {
-        for (std::size_t i = range.begin(); held && i != range.end(); ++i) {
-          const Point p = to_point(points[i]);
-          for (const std::array<Point, 3>& plane : planes)
-            if (CGAL::orientation(plane[0], plane[1], plane[2], p) == CGAL::POSITIVE) {
-              held = false;
-              break;
-            }
-        }
-        return held;
+  }) && std::any_of(box.positions.begin(), box.positions.end(), [&](const Vertex& v) { return behind_every_plane(to_point(v)); });
+  const std::vector<Vertex> undecided = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), 4096), std::vector<Vertex>{},
+      [&](const tbb::blocked_range<std::size_t>& range, std::vector<Vertex> left) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+          if (!behind_every_plane(to_point(points[i]))) left.push_back(points[i]);
+        return left;
       },
-      [](bool a, bool b) { return a && b; });
+      [](std::vector<Vertex> a, const std::vector<Vertex>& b) {
+        a.insert(a.end(), b.begin(), b.end());
+        return a;
+      });
+  if (undecided.empty()) return true;
+  if (convex) return false;
+  const std::vector<PointLocation> locations = locate_points(box, undecided);
+  return std::none_of(locations.begin(), locations.end(), [](PointLocation l) { return l == PointLocation::outside; });
 }
+
+namespace {
 
 // A pattern search from `axes`: rotations about each box axis by +-step, from 2 degrees
 // halved down to about 0.004 degrees, taking every rotation that shrinks the box fitted to

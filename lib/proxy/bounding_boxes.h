@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -56,5 +57,12 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
 /// A box as a closed, outward-oriented triangle mesh (corners welded, zero-area
 /// triangles dropped).
 TriangleMesh box_mesh(const std::array<Vertex, 8>& corners);
+
+/// Whether every point is inside or on the closed, outward-oriented mesh `box` (exact
+/// predicates): the oriented box's containment proof, for boxes whose faces rounding may
+/// leave slightly bent. Points on or behind every triangle's plane and strictly behind one
+/// are held without more ado; the others are located by winding numbers, unless the mesh is
+/// convex.
+bool holds_every_point(const TriangleMesh& box, const std::vector<Vertex>& points);
 
 }  // namespace visproxy

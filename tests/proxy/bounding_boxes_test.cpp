@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/random.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/sphere_set.h"
@@ -148,6 +149,50 @@ TEST(OrientedBox, FlatMeshGetsTheSmallestRectangleInItsPlane) {
   EXPECT_NEAR(largest_face_area(tilted_result.box), 4.0, 1e-9);
   EXPECT_LT(tilted_result.box.half_extents.minCoeff(), 1e-12);
   EXPECT_TRUE(contains_every_vertex(tilted_result.mesh, tilted));
+}
+
+}  // namespace
+}  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+// The oriented box's containment proof against winding numbers, point by point, on boxes
+// whose top face rounding has bent along its diagonal (one corner raised or lowered: a
+// reflex or a convex crease), and on a flat box: points in the sliver between the face's
+// two planes, on the faces, at the corners, and just outside.
+TEST(BoxContainmentProof, AgreesWithWindingNumbersOnBentAndFlatBoxes) {
+  for (const double bend : {1e-9, -1e-9, 1e-3, -1e-3, 0.0}) {
+    for (const double height : {1.0, 0.0}) {
+      if (height == 0 && bend != 0) continue;
+      SCOPED_TRACE("bend " + std::to_string(bend) + ", height " + std::to_string(height));
+      std::array<Vertex, 8> corners;
+      for (int i = 0; i < 8; ++i)
+        corners[static_cast<std::size_t>(i)] = Vertex(i & 1, (i >> 1) & 1, ((i >> 2) & 1) * height);
+      corners[7].z() += bend;
+      const TriangleMesh box = box_mesh(corners);
+      Random random(17);
+      std::vector<Vertex> points;
+      for (const Vertex& c : corners) points.push_back(c);
+      for (int i = 0; i < 4000; ++i) {
+        const double x = 1.2 * random.uniform() - 0.1, y = 1.2 * random.uniform() - 0.1;
+        // Over the top face, between the planes of its two triangles and a little beyond.
+        const double top = height + std::max(0.0, bend * (x + y - 1));
+        const double z = i % 2 == 0 ? top - 2 * std::abs(bend) * random.uniform() + std::abs(bend) * random.uniform()
+                                    : (1.2 * random.uniform() - 0.1) * std::max(height, 1e-3);
+        points.emplace_back(x, y, i % 7 == 0 ? height : z);
+      }
+      std::size_t held = 0, outside = 0;
+      const std::vector<PointLocation> locations = locate_points(box, points);
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const bool expected = locations[i] != PointLocation::outside;
+        ASSERT_EQ(holds_every_point(box, {points[i]}), expected) << "point " << i;
+        (expected ? held : outside) += 1;
+      }
+      EXPECT_GT(held, 100u);
+      EXPECT_GT(outside, 100u);
+    }
+  }
 }
 
 }  // namespace
