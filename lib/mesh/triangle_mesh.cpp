@@ -1,8 +1,10 @@
 #include "visproxy/mesh/triangle_mesh.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "visproxy/core/errors.h"
 
@@ -24,14 +26,14 @@ void require_coordinates_in_range(const TriangleMesh& mesh, const std::filesyste
 }
 
 BoundingBox bounding_box(const TriangleMesh& mesh) {
-  std::vector<bool> used(mesh.positions.size(), false);
-  BoundingBox box;
+  // The used vertices marked first, then extended in order: one pass over the positions in
+  // memory order instead of three random reads per triangle.
+  std::vector<std::uint8_t> used(mesh.positions.size(), 0);
   for (const Triangle& triangle : mesh.triangles)
-    for (const VertexIndex index : triangle)
-      if (!used[index]) {
-        used[index] = true;
-        box.extend(mesh.positions[index]);
-      }
+    for (const VertexIndex index : triangle) used[index] = 1;
+  BoundingBox box;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    if (used[v]) box.extend(mesh.positions[v]);
   return box;
 }
 
