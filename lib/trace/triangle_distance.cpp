@@ -20,55 +20,23 @@ Vertex segment_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b) 
   return a + t * ab;
 }
 
-double segment_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b) {
-  return (p - segment_nearest_point(p, a, b)).squaredNorm();
-}
-
 // Of the candidate points, the one nearest to p (the first among equals).
 template <std::size_t N>
 Vertex nearest_of(const Vertex& p, const std::array<Vertex, N>& candidates) {
   std::size_t best = 0;
-  for (std::size_t i = 1; i < N; ++i)
-    if ((p - candidates[i]).squaredNorm() < (p - candidates[best]).squaredNorm()) best = i;
+  double best_distance = (p - candidates[0]).squaredNorm();
+  for (std::size_t i = 1; i < N; ++i) {
+    const double distance = (p - candidates[i]).squaredNorm();
+    if (distance < best_distance) best = i, best_distance = distance;
+  }
   return candidates[best];
 }
 
 }  // namespace
 
-double point_triangle_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c) {
+Vertex point_triangle_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c) {
   // The nearest point by the region of the triangle's plane p projects into: a corner, a
   // side, or the inside (barycentric coordinates from the dot products of the sides).
-  const Vertex ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
-  const Vertex bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
-  const Vertex cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return segment_squared_distance(p, a, b);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return segment_squared_distance(p, a, c);
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return segment_squared_distance(p, b, c);
-  const double sum = va + vb + vc;
-  if (!(std::abs(sum) > 0) || !std::isfinite(sum)) {
-    // Collinear corners (no area): the segments they span.
-    return std::min({segment_squared_distance(p, a, b), segment_squared_distance(p, b, c), segment_squared_distance(p, a, c)});
-  }
-  const double v = vb / sum, w = vc / sum;
-  const Vertex nearest = a + v * ab + w * ac;
-  // Rounding can put a nearly degenerate triangle's "inside" point off it: never report
-  // more than the sides give.
-  const double inside = (p - nearest).squaredNorm();
-  return std::min({inside, segment_squared_distance(p, a, b), segment_squared_distance(p, b, c),
-                   segment_squared_distance(p, a, c)});
-}
-
-Vertex point_triangle_nearest_point(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c) {
-  // The same regions as point_triangle_squared_distance.
   const Vertex ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return a;
@@ -87,9 +55,16 @@ Vertex point_triangle_nearest_point(const Vertex& p, const Vertex& a, const Vert
   const std::array<Vertex, 3> sides = {segment_nearest_point(p, a, b), segment_nearest_point(p, b, c),
                                        segment_nearest_point(p, a, c)};
   const double sum = va + vb + vc;
+  // Collinear corners (no area): the segments they span.
   if (!(std::abs(sum) > 0) || !std::isfinite(sum)) return nearest_of(p, sides);
+  // Rounding can put a nearly degenerate triangle's "inside" point off it: never farther
+  // than the sides.
   const double v = vb / sum, w = vc / sum;
   return nearest_of(p, std::array<Vertex, 4>{a + v * ab + w * ac, sides[0], sides[1], sides[2]});
+}
+
+double point_triangle_squared_distance(const Vertex& p, const Vertex& a, const Vertex& b, const Vertex& c) {
+  return (p - point_triangle_nearest_point(p, a, b, c)).squaredNorm();
 }
 
 struct TriangleDistance::Impl {

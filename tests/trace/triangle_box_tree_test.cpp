@@ -9,22 +9,20 @@
 
 #include <algorithm>
 #include <limits>
-#include <numeric>
 #include <vector>
 
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/trace/triangle_distance.h"
 #include "test_meshes.h"
+#include "trace/placed_meshes.h"
 
 namespace visproxy {
 namespace {
 
-std::vector<std::uint32_t> every_triangle(const TriangleMesh& mesh) {
-  std::vector<std::uint32_t> all(mesh.triangles.size());
-  std::iota(all.begin(), all.end(), 0u);
-  return all;
-}
+using testing::every_triangle;
+using testing::kPlacements;
+using testing::Placement;
 
 BoundingBox triangle_box(const TriangleMesh& mesh, std::uint32_t t) {
   BoundingBox box;
@@ -56,24 +54,13 @@ std::vector<std::uint32_t> scanned_in(const TriangleMesh& mesh, const BoundingBo
   return scanned;
 }
 
-struct Placement {
-  const char* name;
-  double scale;
-  Vertex offset;
-};
-
-const Placement kPlacements[] = {{"in place", 1.0, Vertex::Zero()},
-                                 {"10^6 away", 1.0, Vertex(1e6, -2e6, 5e5)},
-                                 {"10^-6 of its size, 10^3 away", 1e-6, Vertex(1e3, 0, -1e3)}};
-
 // Boxes of every size, and boxes that are exactly a triangle's corner: those touch the
 // triangle's box only at a double coordinate that single precision cannot hold.
 TEST(TriangleBoxTree, FindsEveryTriangleWhoseBoxMeetsTheQuerysAnywhere) {
   const TriangleMesh bunny = read_mesh(testing::cgal_mesh("bunny00.off"));
   for (const Placement& placement : kPlacements) {
     SCOPED_TRACE(placement.name);
-    TriangleMesh mesh = bunny;
-    for (Vertex& p : mesh.positions) p = placement.scale * p + placement.offset;
+    const TriangleMesh mesh = testing::placed(bunny, placement);
     const BoundingBox box = bounding_box(mesh);
     const TriangleBoxTree tree(mesh, every_triangle(mesh));
     ASSERT_EQ(tree.size(), mesh.triangles.size());
@@ -106,8 +93,7 @@ TEST(TriangleBoxTree, FindsTheNearestTriangleOfAScanWithItsTieRule) {
   const TriangleMesh bunny = read_mesh(testing::cgal_mesh("bunny00.off"));
   for (const Placement& placement : kPlacements) {
     SCOPED_TRACE(placement.name);
-    TriangleMesh mesh = bunny;
-    for (Vertex& p : mesh.positions) p = placement.scale * p + placement.offset;
+    const TriangleMesh mesh = testing::placed(bunny, placement);
     const BoundingBox box = bounding_box(mesh);
     const double size = box.diagonal();
     const TriangleBoxTree tree(mesh, every_triangle(mesh));

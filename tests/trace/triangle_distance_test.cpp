@@ -9,12 +9,12 @@
 
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <vector>
 
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "test_meshes.h"
+#include "trace/placed_meshes.h"
 
 namespace visproxy {
 namespace {
@@ -26,11 +26,7 @@ double scan(const TriangleMesh& mesh, const Vertex& p) {
   return best;
 }
 
-std::vector<std::uint32_t> every_triangle(const TriangleMesh& mesh) {
-  std::vector<std::uint32_t> all(mesh.triangles.size());
-  std::iota(all.begin(), all.end(), 0u);
-  return all;
-}
+using testing::every_triangle;
 
 TEST(PointTriangleDistance, EveryRegionOfTheTriangle) {
   const Vertex a(0, 0, 0), b(2, 0, 0), c(0, 2, 0);
@@ -79,16 +75,9 @@ TEST(PointTriangleDistance, NearestPointIsOnTheTriangleAtTheDistance) {
 // lies and moved 10^6 away, and on a copy shrunk to 10^-6 of its size 10^3 from the origin.
 TEST(TriangleDistance, FindsTheNearestTriangleOfAScanAnywhere) {
   const TriangleMesh bunny = read_mesh(testing::cgal_mesh("bunny00.off"));
-  struct Case {
-    const char* name;
-    double scale;
-    Vertex offset;
-  };
-  for (const Case& c : {Case{"in place", 1.0, Vertex::Zero()}, Case{"10^6 away", 1.0, Vertex(1e6, -2e6, 5e5)},
-                        Case{"10^-6 of its size, 10^3 away", 1e-6, Vertex(1e3, 0, -1e3)}}) {
-    SCOPED_TRACE(c.name);
-    TriangleMesh mesh = bunny;
-    for (Vertex& p : mesh.positions) p = c.scale * p + c.offset;
+  for (const testing::Placement& placement : testing::kPlacements) {
+    SCOPED_TRACE(placement.name);
+    const TriangleMesh mesh = testing::placed(bunny, placement);
     const BoundingBox box = bounding_box(mesh);
     const double size = box.diagonal();
     const TriangleDistance distance(mesh, every_triangle(mesh));
