@@ -52,33 +52,26 @@ class BvhOracle {
   using Geom_traits = CGAL::Alpha_wraps_3::internal::Alpha_wrap_AABB_traits<Kernel>;
   using FT = Kernel::FT;
 
-  /// Over `shared`, the input's triangles with non-collinear corners, or (nullptr) over a
-  /// BVH of its own.
-  BvhOracle(const TriangleMesh& mesh, const TriangleBoxTree* shared) : mesh_(mesh) {
-    SoupPrimitives primitives = soup_primitives(mesh);
+  /// Over `triangles`, a BVH of the input's triangles with non-collinear corners, and
+  /// `degenerate`, the segments and points its other triangles span (soup_primitives).
+  /// `bounds` is bounding_box(mesh): every corner of every triangle is a point of the input
+  /// or lies between two.
+  BvhOracle(const TriangleMesh& mesh, const BoundingBox& bounds, const TriangleBoxTree& triangles,
+            const SoupPrimitives& degenerate)
+      : mesh_(mesh),
+        bbox_(bounds.min.x(), bounds.min.y(), bounds.min.z(), bounds.max.x(), bounds.max.y(), bounds.max.z()),
+        triangles_(&triangles) {
     // Segments as triangles (a, b, b), points as (p, p, p).
-    for (const auto& [from, to] : primitives.segments) {
+    for (const auto& [from, to] : degenerate.segments) {
       const auto first = static_cast<VertexIndex>(degenerate_.positions.size());
       degenerate_.positions.push_back(from);
       degenerate_.positions.push_back(to);
       degenerate_.triangles.push_back({first, first + 1, first + 1});
     }
-    for (const Vertex& p : primitives.points) {
+    for (const Vertex& p : degenerate.points) {
       const auto index = static_cast<VertexIndex>(degenerate_.positions.size());
       degenerate_.positions.push_back(p);
       degenerate_.triangles.push_back({index, index, index});
-    }
-    // Every corner of every triangle is a point of the input or lies between two.
-    BoundingBox box;
-    for (const Triangle& t : mesh.triangles)
-      for (const VertexIndex v : t) box.extend(mesh.positions[v]);
-    bbox_ = CGAL::Bbox_3(box.min.x(), box.min.y(), box.min.z(), box.max.x(), box.max.y(), box.max.z());
-    primitives.triangles = {};
-    if (shared) {
-      triangles_ = shared;
-    } else {
-      own_triangles_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
-      triangles_ = own_triangles_.get();
     }
     std::vector<std::uint32_t> all(degenerate_.triangles.size());
     for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
@@ -152,27 +145,24 @@ class BvhOracle {
   };
 
   const TriangleMesh& mesh_;
+  CGAL::Bbox_3 bbox_;
   TriangleMesh degenerate_;
   Geom_traits traits_;
-  CGAL::Bbox_3 bbox_;
-  std::unique_ptr<TriangleBoxTree> own_triangles_;
-  const TriangleBoxTree* triangles_ = nullptr;
+  const TriangleBoxTree* triangles_;
   std::unique_ptr<TriangleBoxTree> degenerates_;
 };
 
 using Wrapper = CGAL::Alpha_wraps_3::internal::Alpha_wrap_3<BvhOracle>;
 
-}  // namespace
-
-namespace {
-
-AlphaWrapResult wrap_with(const TriangleMesh& mesh, const AlphaWrapOptions& options, const TriangleBoxTree* shared) {
-  const double diagonal = bounding_box(mesh).diagonal();
+AlphaWrapResult wrap_with(const TriangleMesh& mesh, const AlphaWrapOptions& options, const TriangleBoxTree& triangles,
+                          const SoupPrimitives& degenerate) {
+  const BoundingBox bounds = bounding_box(mesh);
+  const double diagonal = bounds.diagonal();
   AlphaWrapResult result;
   result.alpha_world = options.alpha_relative * diagonal;
   result.offset_world = options.offset_relative * diagonal;
 
-  const BvhOracle oracle(mesh, shared);
+  const BvhOracle oracle(mesh, bounds, triangles, degenerate);
   SurfaceMesh wrap;
   Wrapper wrapper(oracle);
   wrapper(result.alpha_world, result.offset_world, wrap);
@@ -216,15 +206,17 @@ void check_alpha_wrap_input(const TriangleMesh& mesh, const AlphaWrapOptions& op
 }
 
 AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOptions& options,
-                                 const TriangleBoxTree& triangles) {
-  return wrap_with(mesh, options, &triangles);
+                                 const TriangleBoxTree& triangles, const SoupPrimitives& degenerate) {
+  return wrap_with(mesh, options, triangles, degenerate);
 }
 
 }  // namespace detail
 
 AlphaWrapResult build_alpha_wrap(const TriangleMesh& mesh, const AlphaWrapOptions& options) {
   detail::check_alpha_wrap_input(mesh, options);
-  return wrap_with(mesh, options, nullptr);
+  SoupPrimitives primitives = soup_primitives(mesh);
+  const TriangleBoxTree triangles(mesh, std::move(primitives.triangle_indices));
+  return wrap_with(mesh, options, triangles, primitives);
 }
 
 }  // namespace visproxy

@@ -169,12 +169,10 @@ std::optional<bool> inside_by_parity(const Point& x, double reach, Random& direc
 
 class InputGeometry {
  public:
-  explicit InputGeometry(const TriangleMesh& mesh) : mesh_(mesh) {
-    SoupPrimitives primitives = soup_primitives(mesh);
-    for (const auto& [from, to] : primitives.segments) segments_.emplace_back(to_point(from), to_point(to));
-    for (const Vertex& p : primitives.points) points_.push_back(to_point(p));
-    primitives.triangles = {};
-    triangle_tree_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives.triangle_indices));
+  explicit InputGeometry(const TriangleMesh& mesh) : mesh_(mesh), primitives_(soup_primitives(mesh)) {
+    for (const auto& [from, to] : primitives_.segments) segments_.emplace_back(to_point(from), to_point(to));
+    for (const Vertex& p : primitives_.points) points_.push_back(to_point(p));
+    triangle_tree_ = std::make_unique<TriangleBoxTree>(mesh, std::move(primitives_.triangle_indices));
     if (!segments_.empty()) {
       segment_tree_.insert(segments_.begin(), segments_.end());
       segment_tree_.build();
@@ -194,6 +192,7 @@ class InputGeometry {
 
   const std::vector<Vertex>& representatives() const { return representatives_; }
   const TriangleBoxTree& triangles() const { return *triangle_tree_; }
+  const SoupPrimitives& degenerate() const { return primitives_; }
 
   /// Does the closed triangle meet any input triangle (or degenerate triangle)?
   bool meets(const CgalTriangle& t) const {
@@ -354,6 +353,7 @@ class InputGeometry {
   }
 
   const TriangleMesh& mesh_;
+  SoupPrimitives primitives_;  // the segments and points (the triangles are in triangle_tree_)
   std::unique_ptr<TriangleBoxTree> triangle_tree_;  // the triangles with non-collinear corners
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
@@ -1219,6 +1219,7 @@ ConservativeInput::ConservativeInput(const TriangleMesh& input) : impl_(std::mak
 ConservativeInput::~ConservativeInput() = default;
 
 const TriangleBoxTree& ConservativeInput::triangles() const { return impl_->geometry.triangles(); }
+const SoupPrimitives& ConservativeInput::degenerate() const { return impl_->geometry.degenerate(); }
 
 bool ConservativeInput::starts_conservative(const TriangleMesh& surface, InputSide side) const {
   return start_is_conservative(surface, impl_->geometry, side);

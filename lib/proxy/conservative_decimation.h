@@ -11,6 +11,7 @@
 
 namespace visproxy {
 class TriangleBoxTree;
+struct SoupPrimitives;
 }
 
 namespace visproxy::detail {
@@ -46,6 +47,9 @@ class ConservativeInput {
   /// The BVH of the input's triangles with non-collinear corners (soup_primitives'
   /// triangle_indices), for the alpha wrap that starts an outer hull.
   const TriangleBoxTree& triangles() const;
+  /// The segments and points the input's other triangles span (soup_primitives; its
+  /// triangle_indices are in triangles()).
+  const SoupPrimitives& degenerate() const;
 
   /// Euclidean distance from `p` to the input (double precision, BVH over its triangles).
   double distance(const Vertex& p) const;

@@ -34,13 +34,13 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
   detail::check_alpha_wrap_input(input, wrap_options);
   // The input's BVH serves the wrap's queries and then the decimation's checks.
   const detail::ConservativeInput geometry(input);
-  AlphaWrapResult wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles());
+  AlphaWrapResult wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles(), geometry.degenerate());
   for (int attempt = 1; !geometry.starts_conservative(wrap.mesh, detail::InputSide::inside); ++attempt) {
     if (attempt == 4)
       throw Error("outer hull: the alpha wrap is not a closed, embedded surface clear of the input, even with 8 "
                   "times the offset");
     wrap_options.offset_relative *= 2;
-    wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles());
+    wrap = detail::build_alpha_wrap(input, wrap_options, geometry.triangles(), geometry.degenerate());
   }
 
   OuterHullResult result;

@@ -16,7 +16,6 @@ SoupPrimitives soup_primitives(const TriangleMesh& mesh) {
     const Point pb(b.x(), b.y(), b.z());
     const Point pc(c.x(), c.y(), c.z());
     if (!CGAL::collinear(pa, pb, pc)) {
-      result.triangles.push_back(t);
       result.triangle_indices.push_back(index);
     } else if (pa == pb && pb == pc) {
       result.points.push_back(a);

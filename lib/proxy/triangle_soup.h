@@ -11,8 +11,7 @@
 namespace visproxy {
 
 struct SoupPrimitives {
-  std::vector<Triangle> triangles;                  ///< triangles with non-collinear corners
-  std::vector<std::uint32_t> triangle_indices;      ///< their indices in mesh.triangles
+  std::vector<std::uint32_t> triangle_indices;      ///< triangles with non-collinear corners (indices)
   std::vector<std::pair<Vertex, Vertex>> segments;  ///< collinear corners: the two extreme ones
   std::vector<Vertex> points;                       ///< three equal corners
 };

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "test_meshes.h"
 
@@ -19,7 +21,7 @@ TEST(SoupPrimitives, SortsProperCollinearAndPointTriangles) {
   mesh.triangles.push_back({first + 1, first + 1, first + 1});  // a point
   mesh.triangles.push_back({first, first, first + 1});          // repeated corner: a segment
   const SoupPrimitives primitives = soup_primitives(mesh);
-  EXPECT_EQ(primitives.triangles, testing::tetrahedron().triangles);
+  EXPECT_EQ(primitives.triangle_indices, (std::vector<std::uint32_t>{0, 1, 2, 3}));  // the tetrahedron's
   ASSERT_EQ(primitives.segments.size(), 2u);
   EXPECT_EQ(primitives.segments[0].first, Vertex(5, 5, 5));
   EXPECT_EQ(primitives.segments[0].second, Vertex(2, 2, 2));
