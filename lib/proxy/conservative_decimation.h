@@ -70,9 +70,10 @@ class ConservativeInput {
 /// checked exactly before it is made so that the surface stays closed, 2-manifold,
 /// self-intersection-free and clear of the input, with every input component on the side
 /// it started on. The surface's normals must face away from the input (outward for outer
-/// hulls, inward for inner hulls): each merged vertex goes on the far side of the planes of
-/// the triangles it replaces, as in progressive hulls, and vertex moves go along minus the
-/// normal, towards the input.
+/// hulls, inward for inner hulls): a merged vertex that fails the checks where the quadric
+/// error is least is tried again on the far side of the planes of the triangles it
+/// replaces, as in progressive hulls, and vertex moves go along minus the normal, towards
+/// the input.
 class ConservativeDecimator {
  public:
   ConservativeDecimator(const TriangleMesh& surface, const ConservativeInput& input);
@@ -85,12 +86,18 @@ class ConservativeDecimator {
   /// precision distances) from the input, on either side; 0 (the default) asks only that
   /// it does not meet the input.
   void keep_clear_by(double clearance);
-  /// Collapses edges, the one that moves the surface through the least volume first, until
-  /// at most `max_triangles` remain or no collapse passes the checks.
+  /// Collapses edges, the one of least quadric error first (Garland & Heckbert: the area-
+  /// weighted squared distances to the planes of the surface at the start or after the
+  /// last move_towards_input, summed over the merged vertices), until at most
+  /// `max_triangles` remain or no collapse passes the checks. Once at most twice
+  /// `max_triangles` remain, the merged vertex goes to the quadric's minimiser first; before
+  /// that, and when the minimiser fails the checks, to the position beyond the planes of
+  /// the star that adds the least volume (progressive hulls), at that position's error.
   void collapse_edges(std::size_t max_triangles);
   /// Moves each vertex towards the input, along minus its normal, by 90 %, 60 % or 30 % of
   /// its distance to the input less the clearance (keep_clear_by): the first that passes
   /// the checks. A vertex then stays at least 0.1 x its distance + 0.9 x the clearance away.
+  /// The quadrics are then made again from the moved surface.
   void move_towards_input();
   /// The current surface, with unused vertices dropped.
   TriangleMesh result() const;

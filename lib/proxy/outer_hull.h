@@ -34,9 +34,10 @@ struct OuterHullResult {
 };
 
 /// Outer hull of at most `max_triangles` triangles: the input is alpha-wrapped
-/// (build_alpha_wrap), then edges of the wrap are collapsed greedily, the collapse that adds
-/// the least enclosed volume first, with each merged vertex placed, as in progressive hulls
-/// (Sander, Gu, Gortler, Hoppe, Snyder 2000), on the outer side of the planes of all the
+/// (build_alpha_wrap), then edges of the wrap are collapsed greedily, the collapse of least
+/// quadric error first (Garland & Heckbert 1997), each merged vertex placed where that
+/// error is least or, if the checks below refuse that position, as in progressive hulls
+/// (Sander, Gu, Gortler, Hoppe, Snyder 2000) on the outer side of the planes of all the
 /// triangles it replaces, at the point that minimises the added volume (a 3-variable LP).
 /// When the collapses stall above the budget (every remaining collapse would fold the mesh
 /// into itself), every vertex is moved towards the input and the collapses resume, up to
