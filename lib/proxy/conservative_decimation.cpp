@@ -571,7 +571,7 @@ class TriangleGrid {
 // The decimation.
 
 // A quadric error (Garland & Heckbert 1997): the area-weighted sum of squared distances to
-// planes, x'Ax + 2b'x + c, in the decimator's frame (centred and scaled, see Frame).
+// planes, x'Ax + 2b'x + c, in the decimator's frame (centred and scaled: to_frame).
 struct Quadric {
   std::array<double, 6> a{};  // a00 a01 a02 a11 a12 a22
   std::array<double, 3> b{};
@@ -1183,7 +1183,7 @@ class ConservativeDecimator::Impl {
   // (kQuadricPlacementFactor x the budget of the running collapse_edges), the hull's
   // before. The collapses far above the budget gain little from it and pay its second
   // checks: outer:512 took 1.4–1.9 s on the armadillo and bunny00 with the quadric's
-  // position throughout, 1.1–1.4 s (as before it) from twice the budget, for f_miss 0.965
+  // position throughout, 1.1–1.7 s (as before it) from twice the budget, for f_miss 0.965
   // and 0.979 against 0.965 and 0.980 (0.959 and 0.976 with the hull's alone).
   std::size_t quadric_below_ = 0;
   static constexpr std::size_t kQuadricPlacementFactor = 2;
