@@ -29,7 +29,8 @@ install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/" DESTINATION "${CMAKE_INSTALL_INCL
         PATTERN "embree_support.h" EXCLUDE
         PATTERN "assimp_support.h" EXCLUDE
         PATTERN "conservative_decimation.h" EXCLUDE
-        PATTERN "alpha_wrap_shared.h" EXCLUDE)
+        PATTERN "alpha_wrap_shared.h" EXCLUDE
+        PATTERN "plane_quadric.h" EXCLUDE)
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/data/schemas/" DESTINATION "${VISPROXY_INSTALL_SCHEMADIR}")
 install(EXPORT visproxyTargets NAMESPACE visproxy:: DESTINATION "${VISPROXY_INSTALL_CMAKEDIR}")
 

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/plane_quadric.h"
 
 namespace visproxy {
 namespace {
@@ -46,8 +47,8 @@ using Vec3 = Eigen::Vector3d;
 
 // Border planes weigh this much per squared edge length (a triangle's plane weighs its area).
 constexpr double kBorderWeight = 10.0;
-// The quadric's 3x3 part is solved for the optimal position only if det(A) / (trace(A)/3)^3,
-// which is 1 for an isotropic quadric and 0 for a flat or ridge-like one, exceeds this.
+// The quadric's 3x3 part is solved for the optimal position only if det(A) / (trace(A)/3)^3
+// exceeds this (PlaneQuadric::minimiser).
 constexpr double kMinRelativeDeterminant = 1e-3;
 // A collapse is a flip if a moved triangle's normal turns by this much or more (cosine).
 constexpr double kMinNormalCosine = 0.0;
@@ -57,58 +58,7 @@ constexpr double kPassErrorSlack = 1.5;
 constexpr std::uint32_t kDeadTriangle = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint32_t kUnnumbered = std::numeric_limits<std::uint32_t>::max();
 
-// Symmetric 4x4 quadric [A b; b^T c] in its 10 distinct entries, with the area it stands for.
-struct Quadric {
-  double xx = 0, xy = 0, xz = 0, xw = 0, yy = 0, yz = 0, yw = 0, zz = 0, zw = 0, ww = 0;
-  double weight = 0;
-
-  // weight * (n.p + d)^2 for a unit normal n.
-  static Quadric plane(const Vec3& n, double d, double weight) {
-    Quadric q;
-    q.xx = weight * n.x() * n.x();
-    q.xy = weight * n.x() * n.y();
-    q.xz = weight * n.x() * n.z();
-    q.xw = weight * n.x() * d;
-    q.yy = weight * n.y() * n.y();
-    q.yz = weight * n.y() * n.z();
-    q.yw = weight * n.y() * d;
-    q.zz = weight * n.z() * n.z();
-    q.zw = weight * n.z() * d;
-    q.ww = weight * d * d;
-    q.weight = weight;
-    return q;
-  }
-
-  Quadric& operator+=(const Quadric& o) {
-    xx += o.xx, xy += o.xy, xz += o.xz, xw += o.xw, yy += o.yy;
-    yz += o.yz, yw += o.yw, zz += o.zz, zw += o.zw, ww += o.ww;
-    weight += o.weight;
-    return *this;
-  }
-  friend Quadric operator+(Quadric a, const Quadric& b) { return a += b; }
-
-  // Sum of the weighted squared distances of p to the planes.
-  double sum(const Vec3& p) const {
-    const double x = p.x(), y = p.y(), z = p.z();
-    return x * (xx * x + 2 * (xy * y + xz * z + xw)) + y * (yy * y + 2 * (yz * z + yw)) + z * (zz * z + 2 * zw) + ww;
-  }
-
-  // Squared distance of p to the planes, averaged by weight; 0 for an empty quadric.
-  double error(const Vec3& p) const { return weight > 0 ? std::max(0.0, sum(p)) / weight : 0.0; }
-
-  // The minimiser of the quadric if A is well-conditioned.
-  bool minimiser(Vec3& out) const {
-    const double c00 = yy * zz - yz * yz, c01 = xz * yz - xy * zz, c02 = xy * yz - xz * yy;
-    const double det = xx * c00 + xy * c01 + xz * c02;
-    const double third_trace = (xx + yy + zz) / 3;
-    if (!(third_trace > 0) || !(det > kMinRelativeDeterminant * third_trace * third_trace * third_trace)) return false;
-    const double c11 = xx * zz - xz * xz, c12 = xy * xz - xx * yz, c22 = xx * yy - xy * xy;
-    const double inverse_det = 1 / det;
-    out = {-(c00 * xw + c01 * yw + c02 * zw) * inverse_det, -(c01 * xw + c11 * yw + c12 * zw) * inverse_det,
-           -(c02 * xw + c12 * yw + c22 * zw) * inverse_det};
-    return out.allFinite();
-  }
-};
+using Quadric = detail::PlaneQuadric;
 
 struct Placement {
   double error;
@@ -332,7 +282,7 @@ class QuadricSimplifier {
     const Vec3 midpoint = (pa + pb) / 2;
     Vec3 optimum;
     // Keep the optimum near the edge: far-off minimisers of nearly singular systems fold the mesh.
-    if (q.minimiser(optimum) && (optimum - midpoint).squaredNorm() <= (pa - pb).squaredNorm()) {
+    if (q.minimiser(optimum, kMinRelativeDeterminant) && (optimum - midpoint).squaredNorm() <= (pa - pb).squaredNorm()) {
       // At the minimiser x of x^T A x + 2 b.x + c, A x = -b, so the sum is b.x + c.
       const double sum = q.xw * optimum.x() + q.yw * optimum.y() + q.zw * optimum.z() + q.ww;
       return {std::max(0.0, sum) * inverse_weight, optimum};
