@@ -101,7 +101,9 @@ Piece build_piece(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOp
                       {"wrap_triangles", outer.wrap_triangles},
                       {"wrap_alpha_world", outer.wrap_alpha_world},
                       {"wrap_offset_world", outer.wrap_offset_world},
-                      {"max_distance_to_input_world", outer.max_distance_to_input_world}};
+                      {"max_distance_to_input_world", outer.max_distance_to_input_world},
+                      {"clearance_world", outer.clearance_world},
+                      {"clearance_kept", outer.clearance_kept}};
       break;
     }
     case ProxyMethod::inner_hull: {

@@ -263,7 +263,17 @@ class InputGeometry {
             return true;
       return false;
     };
-    if (any_overlapping(query, [](const CGAL::Bbox_3&) { return true; }, close_to_triangle)) return true;
+    // Nodes whose boxes, enlarged by the limit (rounded outwards), the triangle misses hold
+    // no triangle within the limit of it.
+    const auto near_node = [&](const CGAL::Bbox_3& node) {
+      constexpr double kDown = -std::numeric_limits<double>::infinity();
+      constexpr double kUp = std::numeric_limits<double>::infinity();
+      const CGAL::Bbox_3 enlarged(std::nextafter(node.xmin() - limit, kDown), std::nextafter(node.ymin() - limit, kDown),
+                                  std::nextafter(node.zmin() - limit, kDown), std::nextafter(node.xmax() + limit, kUp),
+                                  std::nextafter(node.ymax() + limit, kUp), std::nextafter(node.zmax() + limit, kUp));
+      return CGAL::do_intersect(t, enlarged);
+    };
+    if (any_overlapping(query, near_node, close_to_triangle)) return true;
     std::vector<SegmentPrimitive::Id> segment_hits;  // (const and safe to call from several threads)
     if (!segments_.empty()) segment_tree_.all_intersected_primitives(query, std::back_inserter(segment_hits));
     for (const auto& id : segment_hits) {  // degenerate input triangles

@@ -10,6 +10,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/proxy/alpha_wrap_shared.h"
 #include "visproxy/proxy/conservative_decimation.h"
+#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {
@@ -28,6 +29,9 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
                                     std::to_string(options.max_triangles));
   require_positive(options.wrap_alpha_relative, "wrap_alpha_relative");
   require_positive(options.wrap_offset_relative, "wrap_offset_relative");
+  if (!(options.clearance_relative >= 0 && options.clearance_relative < 0.1))
+    throw InvalidInputError("", "outer hull: clearance_relative must be in [0, 0.1), got " +
+                                    std::to_string(options.clearance_relative));
 
   AlphaWrapOptions wrap_options{.alpha_relative = options.wrap_alpha_relative,
                                 .offset_relative = options.wrap_offset_relative};
@@ -47,18 +51,27 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
   result.wrap_triangles = wrap.mesh.triangles.size();
   result.wrap_alpha_world = wrap.alpha_world;
   result.wrap_offset_world = wrap.offset_world;
+  result.clearance_world = options.clearance_relative * bounding_box(input).diagonal();
   if (wrap.mesh.triangles.size() <= options.max_triangles) {
     result.mesh = std::move(wrap.mesh);
   } else {
-    detail::ConservativeDecimator decimator(wrap.mesh, geometry);
-    decimator.collapse_edges(options.max_triangles);
-    for (int stage = 0; stage < 3 && decimator.triangle_count() > options.max_triangles; ++stage) {
-      decimator.move_towards_input();
+    auto decimate = [&](double clearance) {
+      detail::ConservativeDecimator decimator(wrap.mesh, geometry);
+      decimator.keep_clear_by(clearance);
       decimator.collapse_edges(options.max_triangles);
-    }
-    decimator.move_towards_input();
-    result.mesh = decimator.result();
+      for (int stage = 0; stage < 3 && decimator.triangle_count() > options.max_triangles; ++stage) {
+        decimator.move_towards_input();
+        decimator.collapse_edges(options.max_triangles);
+      }
+      decimator.move_towards_input();
+      return decimator.result();
+    };
+    // With the clearance asked of every new triangle first; if that leaves the budget
+    // unreached, again with none (only the exact checks).
+    result.mesh = decimate(result.clearance_world);
+    if (result.mesh.triangles.size() > options.max_triangles && result.clearance_world > 0) result.mesh = decimate(0);
   }
+  result.clearance_kept = surfaces_clear_by(result.mesh, input, result.clearance_world);
   result.reached_target = result.mesh.triangles.size() <= options.max_triangles;
   result.max_distance_to_input_world = geometry.distance_bound(result.mesh, bounding_box(input).diagonal() / 100);
   return result;

@@ -18,6 +18,13 @@ struct OuterHullOptions {
   /// Offset of the starting wrap, relative to the diagonal. Default 1/600 (0.17 %): the gap
   /// between the input and the wrap the decimation starts from.
   double wrap_offset_relative = 1.0 / 600;
+  /// Clearance every new triangle keeps from the input, relative to the bounding-box
+  /// diagonal (double-precision distances; see InnerHullOptions::clearance_relative): a
+  /// proxy that keeps it keeps its proof in single-precision renderers, which use a proxy
+  /// that comes within their rounding bound only as a general proxy. If the collapses
+  /// cannot reach the budget with it, they are made again without it (clearance_kept then
+  /// says whether the result keeps it anyway). 0 asks only that no triangle meets the input.
+  double clearance_relative = 1e-4;
 };
 
 struct OuterHullResult {
@@ -31,6 +38,10 @@ struct OuterHullResult {
   /// distance from any point of that triangle to its nearest sample. A bound, not an
   /// estimate (up to the rounding of the distance computations).
   double max_distance_to_input_world = 0;
+  double clearance_world = 0;  ///< clearance_relative x the input's diagonal
+  /// Whether every point of the proxy surface is farther than clearance_world from the
+  /// input (surfaces_clear_by; the exact containment holds either way).
+  bool clearance_kept = false;
 };
 
 /// Outer hull of at most `max_triangles` triangles: the input is alpha-wrapped
@@ -42,7 +53,9 @@ struct OuterHullResult {
 /// When the collapses stall above the budget (every remaining collapse would fold the mesh
 /// into itself), every vertex is moved towards the input and the collapses resume, up to
 /// three times. Finally every vertex is moved towards the input (along minus its normal, by
-/// at most 90 % of its distance to the input) where the checks below allow it.
+/// at most 90 % of its distance to the input) where the checks below allow it. Every new
+/// triangle also keeps clearance_relative of the diagonal from the input; if the budget is
+/// not reached so, the decimation is made again without that clearance.
 ///
 /// Guarantees, checked with exact predicates (CGAL's filtered kernel) at every step rather
 /// than assumed from the construction:
@@ -64,7 +77,8 @@ struct OuterHullResult {
 /// times, before giving up with visproxy::Error.
 ///
 /// Throws InvalidInputError (empty file name) for max_triangles < 4, wrap options that are
-/// not positive finite numbers, and any input build_alpha_wrap rejects.
+/// not positive finite numbers, clearance_relative outside [0, 0.1), and any input
+/// build_alpha_wrap rejects.
 OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptions& options);
 
 }  // namespace visproxy
