@@ -1330,6 +1330,23 @@ std::vector<std::size_t> ConservativeInput::triangles_meeting(const TriangleMesh
 
 double ConservativeInput::distance(const Vertex& p) const { return impl_->geometry.distance(to_point(p)); }
 
+bool ConservativeInput::keeps_clear(const TriangleMesh& surface, double clearance) const {
+  const InputGeometry& input = impl_->geometry;
+  std::atomic<bool> clear{true};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surface.triangles.size(), 8),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t i = range.begin(); i != range.end() && clear; ++i) {
+                        const Triangle& t = surface.triangles[i];
+                        const CgalTriangle triangle(to_point(surface.positions[t[0]]), to_point(surface.positions[t[1]]),
+                                                    to_point(surface.positions[t[2]]));
+                        if (triangle.is_degenerate() || input.meets(triangle) ||
+                            (clearance > 0 && input.comes_within(triangle, clearance)))
+                          clear = false;
+                      }
+                    });
+  return clear;
+}
+
 double ConservativeInput::distance_bound(const TriangleMesh& surface, double resolution) const {
   return visproxy::detail::distance_bound(surface, impl_->geometry, resolution);
 }

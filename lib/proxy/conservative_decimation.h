@@ -51,6 +51,12 @@ class ConservativeInput {
   /// triangle_indices are in triangles()).
   const SoupPrimitives& degenerate() const;
 
+  /// Whether no triangle of `surface` meets the input (exact) or comes within `clearance`
+  /// of it (double-precision distances, `clearance` enlarged by 1e-9 relative against
+  /// rounding, as surfaces_clear_by), through the input's BVH; a triangle with collinear
+  /// corners counts as not clear.
+  bool keeps_clear(const TriangleMesh& surface, double clearance) const;
+
   /// Euclidean distance from `p` to the input (double precision, BVH over its triangles).
   double distance(const Vertex& p) const;
 

@@ -10,7 +10,6 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/proxy/alpha_wrap_shared.h"
 #include "visproxy/proxy/conservative_decimation.h"
-#include "visproxy/verify/containment.h"
 
 namespace visproxy {
 namespace {
@@ -71,7 +70,7 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
     result.mesh = decimate(result.clearance_world);
     if (result.mesh.triangles.size() > options.max_triangles && result.clearance_world > 0) result.mesh = decimate(0);
   }
-  result.clearance_kept = surfaces_clear_by(result.mesh, input, result.clearance_world);
+  result.clearance_kept = geometry.keeps_clear(result.mesh, result.clearance_world);
   result.reached_target = result.mesh.triangles.size() <= options.max_triangles;
   result.max_distance_to_input_world = geometry.distance_bound(result.mesh, bounding_box(input).diagonal() / 100);
   return result;
