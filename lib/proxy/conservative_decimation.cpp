@@ -197,10 +197,13 @@ class InputGeometry {
       seen[component[t]] = true;
       representatives_[component[t]] = mesh.positions[mesh.triangles[t][0]];
     }
-    build_representative_grid(bounding_box(mesh));
+    const BoundingBox box = bounding_box(mesh);
+    magnitude_ = std::max(box.max.cwiseAbs().maxCoeff(), box.min.cwiseAbs().maxCoeff());
+    build_representative_grid(box);
   }
 
   const std::vector<Vertex>& representatives() const { return representatives_; }
+  double magnitude() const { return magnitude_; }
   const TriangleBoxTree& triangles() const { return *triangle_tree_; }
   const SoupPrimitives& degenerate() const { return primitives_; }
 
@@ -377,6 +380,7 @@ class InputGeometry {
   std::unique_ptr<TriangleBoxTree> triangle_tree_;  // the triangles with non-collinear corners
   std::vector<CgalSegment> segments_;
   std::vector<Point> points_;
+  double magnitude_ = 0;  // largest coordinate magnitude of the input
   SegmentTree segment_tree_;
   std::vector<Vertex> representatives_;
   BoundingBox grid_box_;
@@ -1332,6 +1336,11 @@ double ConservativeInput::distance(const Vertex& p) const { return impl_->geomet
 
 bool ConservativeInput::keeps_clear(const TriangleMesh& surface, double clearance) const {
   const InputGeometry& input = impl_->geometry;
+  // surfaces_clear_by's allowance for the rounding of the distances, relative to the
+  // coordinates involved, added to the clearance so that this test is at least as strict.
+  const BoundingBox box = bounding_box(surface);
+  const double limit =
+      clearance + 0x1.0p-40 * (std::max(box.max.cwiseAbs().maxCoeff(), box.min.cwiseAbs().maxCoeff()) + input.magnitude());
   std::atomic<bool> clear{true};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surface.triangles.size(), 8),
                     [&](const tbb::blocked_range<std::size_t>& range) {
@@ -1339,8 +1348,7 @@ bool ConservativeInput::keeps_clear(const TriangleMesh& surface, double clearanc
                         const Triangle& t = surface.triangles[i];
                         const CgalTriangle triangle(to_point(surface.positions[t[0]]), to_point(surface.positions[t[1]]),
                                                     to_point(surface.positions[t[2]]));
-                        if (triangle.is_degenerate() || input.meets(triangle) ||
-                            (clearance > 0 && input.comes_within(triangle, clearance)))
+                        if (triangle.is_degenerate() || input.meets(triangle) || input.comes_within(triangle, limit))
                           clear = false;
                       }
                     });

@@ -52,9 +52,11 @@ class ConservativeInput {
   const SoupPrimitives& degenerate() const;
 
   /// Whether no triangle of `surface` meets the input (exact) or comes within `clearance`
-  /// of it (double-precision distances, `clearance` enlarged by 1e-9 relative against
-  /// rounding, as surfaces_clear_by), through the input's BVH; a triangle with collinear
-  /// corners counts as not clear.
+  /// of it, through the input's BVH: double-precision distances against `clearance`
+  /// enlarged as surfaces_clear_by enlarges it (1e-9 relative and 2^-40 of the coordinates'
+  /// magnitude), so at least as strict as surfaces_clear_by(surface, input, clearance)
+  /// without its pass over every input triangle. A triangle with collinear corners counts
+  /// as not clear.
   bool keeps_clear(const TriangleMesh& surface, double clearance) const;
 
   /// Euclidean distance from `p` to the input (double precision, BVH over its triangles).

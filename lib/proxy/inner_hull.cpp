@@ -461,7 +461,7 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
       relaxed.move_towards_input();
       passes.push_back(flipped(relaxed.result()));
     }
-    while (!(result.clearance_kept = surfaces_clear_by(passes.back(), input, keep_clear)) && passes.size() > 1)
+    while (!(result.clearance_kept = geometry.keeps_clear(passes.back(), keep_clear)) && passes.size() > 1)
       passes.pop_back();
     result.relax_passes_kept = passes.size() - 1;
     mesh = std::move(passes.back());

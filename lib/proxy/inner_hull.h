@@ -26,7 +26,8 @@ struct InnerHullOptions {
   /// renderers in single precision keep a proof only for a proxy that keeps the rounding
   /// bound (2^-21 of the coordinates' magnitude) from the mesh, which a mesh instanced at
   /// a thousandth of a scene 1 000 units across still gets. Passes are undone, last first,
-  /// while the surface comes closer than this to the input (surfaces_clear_by).
+  /// while the surface comes closer than this to the input (tested through the input's
+  /// BVH at least as strictly as surfaces_clear_by).
   double clearance_relative = 1e-4;
 };
 

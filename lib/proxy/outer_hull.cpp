@@ -50,7 +50,8 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
   result.wrap_triangles = wrap.mesh.triangles.size();
   result.wrap_alpha_world = wrap.alpha_world;
   result.wrap_offset_world = wrap.offset_world;
-  result.clearance_world = options.clearance_relative * bounding_box(input).diagonal();
+  const double diagonal = bounding_box(input).diagonal();
+  result.clearance_world = options.clearance_relative * diagonal;
   if (wrap.mesh.triangles.size() <= options.max_triangles) {
     result.mesh = std::move(wrap.mesh);
   } else {
@@ -72,7 +73,7 @@ OuterHullResult build_outer_hull(const TriangleMesh& input, const OuterHullOptio
   }
   result.clearance_kept = geometry.keeps_clear(result.mesh, result.clearance_world);
   result.reached_target = result.mesh.triangles.size() <= options.max_triangles;
-  result.max_distance_to_input_world = geometry.distance_bound(result.mesh, bounding_box(input).diagonal() / 100);
+  result.max_distance_to_input_world = geometry.distance_bound(result.mesh, diagonal / 100);
   return result;
 }
 

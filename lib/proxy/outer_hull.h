@@ -40,8 +40,8 @@ struct OuterHullResult {
   double max_distance_to_input_world = 0;
   double clearance_world = 0;  ///< clearance_relative x the input's diagonal
   /// Whether every point of the proxy surface is farther than clearance_world from the
-  /// input (double-precision distances through the input's BVH, enlarged against rounding
-  /// as surfaces_clear_by does; the exact containment holds either way).
+  /// input (tested through the input's BVH at least as strictly as surfaces_clear_by; the
+  /// exact containment holds either way).
   bool clearance_kept = false;
 };
 
