@@ -95,6 +95,51 @@ bool boxes_overlap(const BoundingBox& a, const BoundingBox& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
+// The slab between two planes parallel to a triangle's that holds the triangle, for pruning
+// tree nodes: a box wholly outside the slab cannot meet the triangle. The normal is the
+// rounded cross product of two sides, but any vector would do: the triangle's projections
+// onto it lie between those of its corners, and both ranges, the triangle's and the box's,
+// are widened by 1e-12 of |normal|_1 x the coordinates' magnitude, far beyond the rounding
+// of a three-term dot product and of the box's centre and half extent (a few units in the
+// last place of that product).
+class TriangleSlab {
+ public:
+  explicit TriangleSlab(const CgalTriangle& t) {
+    std::array<Vertex, 3> corner;
+    for (int i = 0; i < 3; ++i) corner[static_cast<std::size_t>(i)] = {t.vertex(i).x(), t.vertex(i).y(), t.vertex(i).z()};
+    normal_ = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
+    usable_ = normal_.allFinite() && normal_.cwiseAbs().sum() > 0;
+    if (!usable_) return;
+    low_ = high_ = normal_.dot(corner[0]);
+    for (std::size_t i = 1; i < 3; ++i) {
+      const double projection = normal_.dot(corner[i]);
+      low_ = std::min(low_, projection);
+      high_ = std::max(high_, projection);
+    }
+    magnitude_ = std::max({corner[0].cwiseAbs().maxCoeff(), corner[1].cwiseAbs().maxCoeff(), corner[2].cwiseAbs().maxCoeff()});
+    norm1_ = normal_.cwiseAbs().sum();
+    // Products this small could lose digits to underflow, which the allowance does not cover.
+    usable_ = std::isfinite(norm1_ * magnitude_) && norm1_ * magnitude_ > 1e-250;
+  }
+
+  bool misses(const BoundingBox& box) const {
+    if (!usable_) return false;
+    const Vertex centre = 0.5 * (box.min + box.max);
+    const Vertex half = 0.5 * (box.max - box.min);
+    const double at_centre = normal_.dot(centre);
+    const double reach = normal_.cwiseAbs().dot(half);
+    const double magnitude = std::max({magnitude_, box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()});
+    const double allowance = 1e-12 * norm1_ * magnitude;
+    if (!(std::isfinite(at_centre) && std::isfinite(reach) && std::isfinite(allowance))) return false;
+    return at_centre - reach > high_ + allowance || at_centre + reach < low_ - allowance;
+  }
+
+ private:
+  Vertex normal_ = Vertex::Zero();
+  double low_ = 0, high_ = 0, magnitude_ = 0, norm1_ = 0;
+  bool usable_ = false;
+};
+
 // ---------------------------------------------------------------------------------------
 // Exact predicates on triangles given by corner points and corner ids: corners with equal
 // ids are shared, so two triangles may touch there and only there.
@@ -209,7 +254,12 @@ class InputGeometry {
 
   /// Does the closed triangle meet any input triangle (or degenerate triangle)?
   bool meets(const CgalTriangle& t) const {
-    const auto crosses_node = [&](const CGAL::Bbox_3& node) { return CGAL::do_intersect(t, node); };
+    // Nodes whose boxes lie outside the slab of t's plane hold no triangle that meets t. (An
+    // exact triangle-box test prunes a little more but took a quarter of inner:N's time.)
+    const TriangleSlab slab(t);
+    const auto crosses_node = [&](const CGAL::Bbox_3& node) {
+      return !slab.misses({{node.xmin(), node.ymin(), node.zmin()}, {node.xmax(), node.ymax(), node.zmax()}});
+    };
     if (any_overlapping(t.bbox(), crosses_node, [&](const CgalTriangle& u) { return CGAL::do_intersect(t, u); }))
       return true;
     if (!segments_.empty() && segment_tree_.do_intersect(t)) return true;
@@ -266,15 +316,18 @@ class InputGeometry {
             return true;
       return false;
     };
-    // Nodes whose boxes, enlarged by the limit (rounded outwards), the triangle misses hold
-    // no triangle within the limit of it.
+    // Nodes whose boxes, enlarged by the limit (rounded outwards), lie outside the slab of
+    // t's plane hold no triangle within the limit of t: the enlarged box holds every point
+    // within the limit of the node's box, and the slab holds t.
+    const TriangleSlab slab(t);
     const auto near_node = [&](const CGAL::Bbox_3& node) {
       constexpr double kDown = -std::numeric_limits<double>::infinity();
       constexpr double kUp = std::numeric_limits<double>::infinity();
-      const CGAL::Bbox_3 enlarged(std::nextafter(node.xmin() - limit, kDown), std::nextafter(node.ymin() - limit, kDown),
-                                  std::nextafter(node.zmin() - limit, kDown), std::nextafter(node.xmax() + limit, kUp),
-                                  std::nextafter(node.ymax() + limit, kUp), std::nextafter(node.zmax() + limit, kUp));
-      return CGAL::do_intersect(t, enlarged);
+      const BoundingBox enlarged{{std::nextafter(node.xmin() - limit, kDown), std::nextafter(node.ymin() - limit, kDown),
+                                  std::nextafter(node.zmin() - limit, kDown)},
+                                 {std::nextafter(node.xmax() + limit, kUp), std::nextafter(node.ymax() + limit, kUp),
+                                  std::nextafter(node.zmax() + limit, kUp)}};
+      return !slab.misses(enlarged);
     };
     if (any_overlapping(query, near_node, close_to_triangle)) return true;
     std::vector<SegmentPrimitive::Id> segment_hits;  // (const and safe to call from several threads)
