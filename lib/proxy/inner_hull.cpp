@@ -8,7 +8,7 @@
 //   tetrahedral cells", IEICE Transactions E74-D(1), 1991: marching tetrahedra.
 //
 // Why the start lies inside: a grid point p is marked when the input's winding number
-// there is not zero and its distance d(p) to the surface exceeds half a grid cell. The open
+// there is not zero and its distance d(p) to the surface exceeds 0.3 of a grid cell. The open
 // ball B(p, d(p)) meets no input triangle and holds p, so the winding number is constant
 // and non-zero on it: the ball lies in the solid, and so does every vertex placed on an
 // edge from p within 0.9 d(p). A point is safe when d(p) exceeds a cell's diagonal: each
@@ -62,6 +62,13 @@ struct Grid {
 constexpr std::array<std::array<double, 3>, 3> kGridShifts = {{{0.3819660113, 0.2360679775, 0.1458980338},
                                                               {0.5857864376, 0.7320508076, 0.4142135624},
                                                               {0.8541019662, 0.0901699437, 0.6180339887}}};
+
+// Grid points inside farther than this many cells from the surface are marked, and the start's
+// vertices go about this far from it. Half a cell lost the parts about one cell thick and
+// kept the start farther inside: with 0.3, inner:512 blocks 0.845 of the armadillo's lines
+// against 0.826, 0.787 of the camel's against 0.742, 0.934 of bunny00's against 0.925,
+// and as much of the knots', in 9-23 % more time (more start triangles, nearer the input).
+constexpr double kMarkDistance = 0.3;
 
 Grid make_grid(const BoundingBox& box, std::size_t cells, std::size_t attempt) {
   Grid grid;
@@ -341,13 +348,13 @@ InnerHullResult build_inner_hull(const TriangleMesh& input, const InnerHullOptio
     const Grid grid = make_grid(box, result.grid_cells, attempt);
     result.grid_cell_world = grid.cell;
     const Windings windings = scanline_windings(input, grid);
-    // Marked: inside, reliable and farther than half a cell from the surface. Safe: farther
+    // Marked: inside, reliable and farther than kMarkDistance cells from the surface. Safe: farther
     // than a cell's diagonal, so that every tetrahedron at the point lies in the solid
     // (relatively enlarged, so that rounding of the distances cannot call a point safe that
     // is not). Distances come from 4^3 blocks first: d(p) >= d(centre) - |p - centre| (the
     // distance is 1-Lipschitz) decides most points without a query of their own.
     const double safe_distance = std::sqrt(3.0) * grid.cell * (1 + 1e-6);
-    const double mark_distance = 0.5 * grid.cell;
+    const double mark_distance = kMarkDistance * grid.cell;
     std::vector<double> lower(grid.size(), 0.0);  // a lower bound of each point's distance
     std::vector<std::uint8_t> marked(grid.size(), 0);
     std::vector<std::uint8_t> safe(grid.size(), 0);

@@ -59,7 +59,7 @@ std::size_t inner_hull_grid_cells(std::size_t max_triangles);
 ///
 ///  1. Start: the winding number of the input at the vertices of a grid (scanline
 ///     crossings) and their distance to the surface; grid points inside with a distance
-///     above half a cell are marked, and marching tetrahedra (six per cell) separate marked
+///     above 0.3 of a cell are marked, and marching tetrahedra (six per cell) separate marked
 ///     from unmarked points, each vertex within 0.9 of its marked point's distance, so
 ///     inside the solid. Triangles that meet the input (exact test) have their
 ///     tetrahedron's marked corners unmarked unless they are safe (a distance above a
