@@ -37,6 +37,7 @@
 #include "child_process.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/core/process.h"
 #include "visproxy/evaluate/plot.h"
 #include "visproxy/mesh/displace.h"
 #include "visproxy/mesh/read_mesh.h"
@@ -196,6 +197,7 @@ int scaling(const std::filesystem::path& path, const std::vector<int>& levels, c
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   std::filesystem::path path = std::filesystem::path(VISPROXY_MESH_DIR) / "bunny00.off";
   int levels = 0, time_limit = 600;
   bool scaling_mode = false;

@@ -28,6 +28,7 @@
 #include "child_process.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/core/process.h"
 #include "visproxy/evaluate/scene_proxies.h"
 #include "visproxy/render/renderer.h"
 
@@ -205,6 +206,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/bounded_hull.h"
 #include "visproxy/proxy/convex_hull.h"
@@ -119,6 +120,7 @@ void print_added_volume_table() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   try {
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/evaluate/scene_proxies.h"
 #include "visproxy/render/image.h"
 #include "visproxy/render/renderer.h"
@@ -69,6 +70,7 @@ double trimmed_mse(const Image& a, const Image& reference, double drop) {
 }  // namespace
 
 int main(int argc, char** argv) try {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   if (argc < 2) {
     std::fprintf(stderr, "usage: visproxy-bench-lightcuts SCENE|room [--width W] [--height H] [--spp N] [--light-points K] [--error E] "
                          "[--max-cut C] [--reference-spp R] [--vpls N] [--cache DIR] [--images DIR] [--proxy SPEC]...\n");

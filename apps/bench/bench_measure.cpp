@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "visproxy/core/process.h"
 #include "visproxy/measure/proxy_measurement.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/mesh/read_mesh.h"
@@ -81,6 +82,7 @@ struct BareScene {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   std::size_t ray_count = 1'000'000;
   int repetitions = 5, subdivide = 0;
   std::string path = std::string(VISPROXY_MESH_DIR) + "/bunny00.off";

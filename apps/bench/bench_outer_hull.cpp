@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "visproxy/core/process.h"
 #include "visproxy/measure/proportion.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/mesh/read_mesh.h"
@@ -68,6 +69,7 @@ void report(const char* name, const TriangleMesh& proxy, double seconds, const s
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   std::size_t line_count = 100000;
   std::size_t budget = 512;
   std::vector<std::string> meshes;

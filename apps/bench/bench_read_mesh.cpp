@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/mesh/read_mesh.h"
 
 #ifndef VISPROXY_MESH_DIR
@@ -256,6 +257,7 @@ void print_table(const std::vector<MeshCase>& cases, const RecordingReporter& re
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   benchmark::Initialize(&argc, argv);  // removes the --benchmark_* flags it knows
 
   std::vector<fs::path> paths;

@@ -52,6 +52,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/subdivide.h"
 #include "visproxy/proxy/quadric_simplify.h"
@@ -250,6 +251,7 @@ std::size_t parse_count(const char* text, const char* option) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   bool skip_slow = false;
   std::size_t repetitions = 0, budget = 512;
   std::vector<fs::path> paths;

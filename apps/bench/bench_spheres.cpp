@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "visproxy/core/process.h"
 #include "visproxy/measure/proxy_measurement.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/mesh/read_mesh.h"
@@ -123,6 +124,7 @@ void run(const std::filesystem::path& path, const Settings& settings) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   Settings settings;
   std::vector<std::filesystem::path> paths;
   try {

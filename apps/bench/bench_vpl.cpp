@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/core/random.h"
 #include "visproxy/evaluate/scene_proxies.h"
 #include "visproxy/render/image.h"
@@ -271,6 +272,7 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   try {
     return run(argc, argv);
   } catch (const std::exception& error) {

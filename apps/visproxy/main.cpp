@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "visproxy/core/errors.h"
+#include "visproxy/core/process.h"
 #include "visproxy/proxy/build_proxies.h"
 
 namespace visproxy::cli {
@@ -73,6 +74,7 @@ std::string unknown_subcommand_message(CLI::App& app, const std::string& word) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
   using namespace visproxy::cli;
   CLI::App app{"visproxy: visibility proxies for shadow rays (build, verify, measure, validate)", "visproxy"};
   app.set_version_flag("--version", VISPROXY_VERSION);
