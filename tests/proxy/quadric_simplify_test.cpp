@@ -3,6 +3,7 @@
 #include "visproxy/proxy/quadric_simplify.h"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <limits>
@@ -77,6 +78,20 @@ TEST(QuadricSimplify, IsDeterministic) {
   EXPECT_EQ(first.mesh, second.mesh);
   EXPECT_EQ(first.max_quadric_error_relative, second.max_quadric_error_relative);
   EXPECT_EQ(first.collapses, second.collapses);
+}
+
+// Edges are rated in parallel; the result must not depend on how many threads rate them.
+TEST(QuadricSimplify, IsTheSameOnOneThreadAsOnAll) {
+  const TriangleMesh input = read_mesh(testing::cgal_mesh("bunny00.off"));
+  const QuadricSimplifyResult all = simplify_quadric(input, {.max_triangles = 512});
+  QuadricSimplifyResult one;
+  {
+    tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = simplify_quadric(input, {.max_triangles = 512});
+  }
+  EXPECT_EQ(all.mesh, one.mesh);
+  EXPECT_EQ(all.max_quadric_error_relative, one.max_quadric_error_relative);
+  EXPECT_EQ(all.collapses, one.collapses);
 }
 
 // Vertices with equal coordinates are one vertex: a soup simplifies exactly like the
