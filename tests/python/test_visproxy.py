@@ -9,6 +9,7 @@ import json
 import os
 import pathlib
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -389,3 +390,30 @@ def test_gltf_is_read_through_assimp_and_a_file_that_crashes_assimp_only_raises(
     with pytest.raises(vp.InvalidInputError, match="Assimp crashed reading it"):
         vp.read_mesh(crash)
     assert vp.read_mesh(KNOT)[1].shape == (6400, 3)  # and this interpreter goes on
+
+
+def _thp_enabled(pid="self"):
+    """The kernel's THP_enabled for a process (Linux), or None where it does not say."""
+    status = pathlib.Path(f"/proc/{pid}/status")
+    if not status.exists():
+        return None
+    for line in status.read_text().splitlines():
+        if line.startswith("THP_enabled:"):
+            return int(line.split()[1])
+    return None
+
+
+@pytest.mark.skipif(_thp_enabled() is None, reason="the kernel does not report THP_enabled")
+def test_transparent_huge_pages_are_turned_off_only_when_asked():
+    # In a child interpreter, so that this process keeps its setting.
+    script = ("import sys, visproxy as vp; before = open('/proc/self/status').read().count('THP_enabled:\\t1'); "
+              "off = vp.disable_transparent_huge_pages(); "
+              "after = open('/proc/self/status').read().count('THP_enabled:\\t1'); print(before, int(off), after)")
+    inherited = str(_thp_enabled())  # a child starts with its parent's setting
+    env = {k: v for k, v in os.environ.items() if k != "VISPROXY_TRANSPARENT_HUGE_PAGES"}
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True)
+    assert result.stdout.split() == [inherited, "1", "0"]
+    env["VISPROXY_TRANSPARENT_HUGE_PAGES"] = "1"
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True)
+    assert result.stdout.split() == [inherited, "0", inherited]
+
