@@ -358,7 +358,7 @@ class QuadricSimplifier {
     }
     if (index + 3 < count)
       for (const std::uint32_t v : {candidates_[index + 3].u, candidates_[index + 3].w})
-        __builtin_prefetch(&refs_[ref_start_[v]]);
+        __builtin_prefetch(refs_.data() + ref_start_[v]);  // may be one past the end: a hint only
     if (index + 2 < count)
       for (const std::uint32_t v : {candidates_[index + 2].u, candidates_[index + 2].w})
         for (std::uint32_t i = ref_start_[v]; i < ref_start_[v + 1]; ++i) __builtin_prefetch(&triangles_[refs_[i]]);
