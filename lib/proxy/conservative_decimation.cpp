@@ -108,7 +108,12 @@ class TriangleSlab {
     std::array<Vertex, 3> corner;
     for (int i = 0; i < 3; ++i) corner[static_cast<std::size_t>(i)] = {t.vertex(i).x(), t.vertex(i).y(), t.vertex(i).z()};
     normal_ = (corner[1] - corner[0]).cross(corner[2] - corner[0]);
-    usable_ = normal_.allFinite() && normal_.cwiseAbs().sum() > 0;
+    abs_normal_ = normal_.cwiseAbs();
+    norm1_ = abs_normal_.sum();
+    magnitude_ = std::max({corner[0].cwiseAbs().maxCoeff(), corner[1].cwiseAbs().maxCoeff(), corner[2].cwiseAbs().maxCoeff()});
+    // Not finite (NaN included), zero, or products so small that they could lose digits to
+    // underflow, which the allowance does not cover: never prune.
+    usable_ = std::isfinite(norm1_ * magnitude_) && norm1_ * magnitude_ > 1e-250;
     if (!usable_) return;
     low_ = high_ = normal_.dot(corner[0]);
     for (std::size_t i = 1; i < 3; ++i) {
@@ -116,10 +121,6 @@ class TriangleSlab {
       low_ = std::min(low_, projection);
       high_ = std::max(high_, projection);
     }
-    magnitude_ = std::max({corner[0].cwiseAbs().maxCoeff(), corner[1].cwiseAbs().maxCoeff(), corner[2].cwiseAbs().maxCoeff()});
-    norm1_ = normal_.cwiseAbs().sum();
-    // Products this small could lose digits to underflow, which the allowance does not cover.
-    usable_ = std::isfinite(norm1_ * magnitude_) && norm1_ * magnitude_ > 1e-250;
   }
 
   bool misses(const BoundingBox& box) const {
@@ -127,7 +128,7 @@ class TriangleSlab {
     const Vertex centre = 0.5 * (box.min + box.max);
     const Vertex half = 0.5 * (box.max - box.min);
     const double at_centre = normal_.dot(centre);
-    const double reach = normal_.cwiseAbs().dot(half);
+    const double reach = abs_normal_.dot(half);
     const double magnitude = std::max({magnitude_, box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()});
     const double allowance = 1e-12 * norm1_ * magnitude;
     if (!(std::isfinite(at_centre) && std::isfinite(reach) && std::isfinite(allowance))) return false;
@@ -136,6 +137,7 @@ class TriangleSlab {
 
  private:
   Vertex normal_ = Vertex::Zero();
+  Vertex abs_normal_ = Vertex::Zero();  // |normal_| componentwise, for a box's reach
   double low_ = 0, high_ = 0, magnitude_ = 0, norm1_ = 0;
   bool usable_ = false;
 };
