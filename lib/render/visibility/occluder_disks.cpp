@@ -234,13 +234,17 @@ bool OccluderDisks::occludes_groups(const Vertex& end, std::size_t first, std::s
       }
     }
     if (group.span > 0) continue;
-    tests += group.count;
-    const std::size_t b = group.begin, n = (group.count + kDiskBlock - 1) / kDiskBlock * kDiskBlock;
-    if (any_disk_occludes(disks_.ux.data() + b, disks_.uy.data() + b, disks_.uz.data() + b, disks_.cos.data() + b, disks_.t.data() + b, n,
-                          dx, dy, dz, zf))
-      return true;
+    if (group_disks_occlude(g, dx, dy, dz, zf, tests)) return true;
   }
   return false;
+}
+
+bool OccluderDisks::group_disks_occlude(std::size_t g, float wx, float wy, float wz, float z, std::uint64_t& tests) const {
+  const DiskGroup& group = groups_[g];
+  tests += group.count;
+  const std::size_t b = group.begin, n = (group.count + kDiskBlock - 1) / kDiskBlock * kDiskBlock;
+  return any_disk_occludes(disks_.ux.data() + b, disks_.uy.data() + b, disks_.uz.data() + b, disks_.cos.data() + b, disks_.t.data() + b, n,
+                           wx, wy, wz, z);
 }
 
 __attribute__((target_clones("avx2", "default"))) bool any_disk_occludes(const float* ux, const float* uy, const float* uz,
@@ -512,13 +516,14 @@ DiskPartition PointDisks::begin(const OccluderDiskIndex& index, const SurfaceHit
     partition.traced = (partition.traced & ~bit) | (without > 0 || own_traced ? bit : 0u);
     partition.disks = (partition.disks & ~bit) | (with > 0 ? bit : 0u);
   }
-  if (made_.size() != index.runs_.size()) made_.assign(index.runs_.size(), 0), group_.resize(index.runs_.size()), stamp_ = 0;
-  if (++stamp_ == 0) std::fill(made_.begin(), made_.end(), 0), stamp_ = 1;  // after 2^32 points
+  if (seen_.size() != index.runs_.size())
+    seen_.assign(index.runs_.size(), 0), group_.resize(index.runs_.size()), cone_.resize(index.runs_.size()), stamp_ = 0;
+  if (++stamp_ == 0) std::fill(seen_.begin(), seen_.end(), 0), stamp_ = 1;  // after 2^32 points
   return partition;
 }
 
 namespace {
-constexpr std::uint32_t kNoGroup = ~std::uint32_t{0};
+constexpr std::uint32_t kNoGroup = ~std::uint32_t{0}, kNotMade = kNoGroup - 1;
 }  // namespace
 
 bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
@@ -530,6 +535,10 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
   const Vertex d = (1 + std::ldexp(1.0, -8)) * w;
   const Vertex inverse(1 / d.x(), 1 / d.y(), 1 / d.z());
   const RenderWorld& world = *index_->world_;
+  // The segment as occludes_groups() compares it with a group's cone.
+  const float zf = segment_length(w);
+  if (!(zf > 0)) return false;
+  const float dx = static_cast<float>(w.x()), dy = static_cast<float>(w.y()), dz = static_cast<float>(w.z());
   return index_->tree_.any_along(
       w, [&](const BoundingBox& box, const Sphere&) {
         double t0 = 0, t1 = 1;
@@ -550,15 +559,30 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
         const OccluderDiskIndex::Run run = index_->runs_[r];
         const bool own = static_cast<int>(run.instance) == own_;
         if (own && skip_own_) return false;
-        if (made_[r] != stamp_) {
+        const SphereCluster& cluster = world.occluder_clusters(run.instance)[run.cluster];
+        if (seen_[r] != stamp_) {
+          seen_[r] = stamp_;
+          if (clusters_) {
+            group_[r] = disks_.behind(cluster.bound) ? kNoGroup : kNotMade;
+            cone_[r] = disks_.bound_cone(cluster.bound);
+          } else {
+            group_[r] = kNotMade, cone_[r] = DiskGroup{};
+          }
+        }
+        if (group_[r] == kNoGroup) return false;
+        const DiskGroup& cone = cone_[r];
+        if (cone.cos >= -1) {
+          ++tests;
+          if (!(dx * cone.ux + dy * cone.uy + dz * cone.uz > cone.cos * zf)) return false;
+        }
+        if (group_[r] == kNotMade) {
           const std::vector<Sphere>& balls = world.occluder_spheres(run.instance);
-          const SphereCluster& cluster = world.occluder_clusters(run.instance)[run.cluster];
           const std::size_t first = disks_.groups();
           disks_.add_run(balls.data() + cluster.begin, balls.data() + cluster.end, own && own_heuristic_,
                          clusters_ ? &cluster.bound : nullptr);
-          made_[r] = stamp_, group_[r] = disks_.groups() > first ? static_cast<std::uint32_t>(first) : kNoGroup;
+          group_[r] = disks_.groups() > first ? static_cast<std::uint32_t>(first) : kNoGroup;
         }
-        return group_[r] != kNoGroup && disks_.occludes_groups(end, group_[r], group_[r] + 1, tests);
+        return group_[r] != kNoGroup && disks_.group_disks_occlude(group_[r], dx, dy, dz, zf, tests);
       });
 }
 

@@ -72,6 +72,10 @@ class OccluderDisks {
   /// occludes() for the groups [first, last) alone (as groups() counts them; a head's span
   /// must end within the range): a set's groups, added by one add().
   bool occludes_groups(const Vertex& end, std::size_t first, std::size_t last, std::uint64_t& tests) const;
+  /// Whether the disks of group `g` (one without span) hide the segment w = (wx, wy, wz)
+  /// from x of length z (as occludes() rounds them), its bound's cone not tested; adds the
+  /// disks compared to `tests`.
+  bool group_disks_occlude(std::size_t g, float wx, float wy, float wz, float z, std::uint64_t& tests) const;
   /// Disks kept (padding not counted).
   std::size_t size() const { return count_; }
   /// Groups kept.
@@ -79,6 +83,13 @@ class OccluderDisks {
 
   /// Grid cells per side over [-1, 1]^2 of the projection.
   static constexpr int kGridSide = 8;
+
+  /// The cone from x of a ball that holds a group's balls, grown as add_run() grows it
+  /// (cos < -1 when x is inside it).
+  DiskGroup bound_cone(const Sphere& bound) const;
+  /// Whether a ball lies wholly behind the tangent plane at x, so that none it holds can
+  /// hide a segment; the test add() makes for each cluster.
+  bool behind(const Sphere& bound) const { return n_.dot(bound.center - x_) <= -bound.radius; }
 
  private:
   struct Soa {
@@ -90,7 +101,6 @@ class OccluderDisks {
     }
   };
   void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound);
-  DiskGroup bound_cone(const Sphere& bound) const;
 
   Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;
@@ -146,7 +156,10 @@ class OccluderDiskIndex {
 /// segment from the point may meet its balls: the index's tree is searched with the
 /// segment lengthened, and the boxes grown, by 2^-8 of its length, which holds every
 /// segment the single-precision test can find hidden (it errs by under 1e-3 radians, for
-/// the smallest balls), so that the answers are those of every disk.
+/// the smallest balls), so that the answers are those of every disk. A cluster the search
+/// finds is first tested by the cone of its bound alone, made once per point, and its
+/// disks are made only for a segment inside that cone (with clusters; the same test the
+/// cluster's group makes before its disks).
 class PointDisks {
  public:
   DiskPartition begin(const OccluderDiskIndex& index, const SurfaceHit& hit, const Vertex& position, bool trace_own,
@@ -163,8 +176,9 @@ class PointDisks {
   int own_ = -1;
   bool skip_own_ = false, own_heuristic_ = false, clusters_ = true;
   std::uint32_t stamp_ = 0;
-  std::vector<std::uint32_t> made_;   // per run of the index: stamp_ once its disks are made
-  std::vector<std::uint32_t> group_;  // per run: its group in disks_, or none (all its balls behind the point)
+  std::vector<std::uint32_t> seen_;  // per run of the index: stamp_ once the point has its cone
+  std::vector<std::uint32_t> group_;  // per run: its group in disks_, none (no ball in front of the point), or not made yet
+  std::vector<DiskGroup> cone_;       // per run: its bound's cone from the point
 };
 
 /// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
