@@ -8,8 +8,9 @@
 // Per scene and mode: instances, the time to read the scene and its proxies and build the
 // RenderWorld, the render time, the shadow rays (for --integrator vpl: the VPL connections),
 // the render time per shadow ray, its ratio to the first scene's, log2(instances)'s ratio
-// beside it (the growth the time per ray must stay under), and the peak memory
-// (getrusage of the child). Every scene is checked: bounds must give exact's image bit for
+// beside it (the growth the time per ray must stay under), the peak memory (getrusage of
+// the child), and for occluder disks the clusters of balls their tree gave each ray (the
+// work that follows how far a ray runs before a ball hides it). Every scene is checked: bounds must give exact's image bit for
 // bit (hashes of the pixels). The stochastic modes use the proxy named by --proxy of each
 // row, as `visproxy render --proxy` does.
 
@@ -70,6 +71,7 @@ struct ChildReport {
   std::size_t instances = 0;
   double load_seconds = 0, render_seconds = 0;
   std::uint64_t rays = 0;        // shadow rays, or VPL connections
+  std::uint64_t disk_clusters = 0;  // clusters of balls the occluder disks' tree gave the segments
   std::uint64_t image_hash = 0;  // FNV-1a over the pixels' bytes
   char message[400] = {};
 };
@@ -102,6 +104,7 @@ int render_one(const std::string& scene_path, std::size_t index, const Settings&
     report.instances = scene.instances.size();
     report.render_seconds = result.stats.seconds;
     report.rays = mode.options.integrator == IntegratorKind::vpl ? result.stats.vpl_connections : result.stats.shadow_rays;
+    report.disk_clusters = result.stats.disk_clusters;
     report.image_hash = fnv1a(result.image.pixels.data(), result.image.pixels.size() * sizeof(Color));
     report.ok = 1;
   });
@@ -162,9 +165,9 @@ int run(int argc, char** argv) {
   std::printf("visproxy-bench-forest: %dx%d; direct: %d spp x %d shadow rays; vpl: %d spp, %d VPLs; seed %llu; each scene "
               "and mode in its own process\n",
               s.width, s.height, s.spp, s.shadow_rays, std::max(1, s.spp / 4), s.vpls, static_cast<unsigned long long>(s.seed));
-  std::printf("%10s  %-42s %9s %9s %12s %10s %9s %9s %9s  %s\n", "instances", "mode", "load s", "render s", "rays", "ns / ray",
-              "/ first", "log2 /", "peak MB", "status");
-  std::string csv = "scene,instances,mode,load_seconds,render_seconds,rays,ns_per_ray,peak_mb,status\n";
+  std::printf("%10s  %-42s %9s %9s %12s %10s %9s %9s %9s %10s  %s\n", "instances", "mode", "load s", "render s", "rays", "ns / ray",
+              "/ first", "log2 /", "peak MB", "clusters", "status");
+  std::string csv = "scene,instances,mode,load_seconds,render_seconds,rays,ns_per_ray,peak_mb,disk_clusters_per_ray,status\n";
   std::vector<double> first_ns(all.size(), std::nan(""));
   std::size_t first_instances = 0;
   bool identical = true;
@@ -178,13 +181,14 @@ int run(int argc, char** argv) {
       if (first_instances == 0 && r.status == "ok") first_instances = c.instances;
       if (std::isnan(first_ns[m])) first_ns[m] = ns;
       const double log_ratio = std::log2(static_cast<double>(c.instances)) / std::log2(static_cast<double>(first_instances));
-      std::printf("%10zu  %-42s %9.2f %9.3f %12llu %10.1f %9.2f %9.2f %9.0f  %s\n", c.instances, all[m].name, c.load_seconds,
-                  c.render_seconds, static_cast<unsigned long long>(c.rays), ns, ns / first_ns[m], log_ratio, r.peak_mb,
+      const double clusters = static_cast<double>(c.disk_clusters) / static_cast<double>(std::max<std::uint64_t>(c.rays, 1));
+      std::printf("%10zu  %-42s %9.2f %9.3f %12llu %10.1f %9.2f %9.2f %9.0f %10.2f  %s\n", c.instances, all[m].name, c.load_seconds,
+                  c.render_seconds, static_cast<unsigned long long>(c.rays), ns, ns / first_ns[m], log_ratio, r.peak_mb, clusters,
                   r.status.c_str());
       std::fflush(stdout);
       char line[512];
-      std::snprintf(line, sizeof line, "%s,%zu,%s,%.4f,%.4f,%llu,%.2f,%.1f,%s\n", scene.c_str(), c.instances, all[m].name,
-                    c.load_seconds, c.render_seconds, static_cast<unsigned long long>(c.rays), ns, r.peak_mb, r.status.c_str());
+      std::snprintf(line, sizeof line, "%s,%zu,%s,%.4f,%.4f,%llu,%.2f,%.1f,%.3f,%s\n", scene.c_str(), c.instances, all[m].name,
+                    c.load_seconds, c.render_seconds, static_cast<unsigned long long>(c.rays), ns, r.peak_mb, clusters, r.status.c_str());
       csv += line;
       if (m == 0) exact_hash = c.image_hash;
       if (m == 1) bounds_hash = c.image_hash;
@@ -195,7 +199,8 @@ int run(int argc, char** argv) {
                 same ? "bit-identical images" : "DIFFERENT IMAGES");
   }
   std::printf("(ns / ray: render time over shadow rays, or over VPL connections for vpl; / first: against the first "
-              "scene's; log2 /: log2 of the instances against the first scene's)\n");
+              "scene's; log2 /: log2 of the instances against the first scene's; clusters: clusters of sphere-set balls the "
+              "occluder disks' tree gave each ray, tested by their bound's cone)\n");
   if (!csv_path.empty()) {
     write_file_atomically(csv_path, csv);
     std::printf("wrote %s\n", csv_path.c_str());

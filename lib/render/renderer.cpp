@@ -143,6 +143,7 @@ nlohmann::json RenderStats::to_json() const {
           {"bounds", {{"unoccluded_by_outside_proxies", bounds_unoccluded}, {"occluded_by_inside_proxies", bounds_occluded}, {"traced_exactly", bounds_traced}, {"shading_points_with_culled_shaft", shafts_culled}}},
           {"vpl_connections", vpl_connections},
           {"disk_tests", disk_tests},
+          {"disk_clusters", disk_clusters},
           {"integrator", integrator.is_null() ? nlohmann::json::object() : integrator},
           {"counted", counted},
           {"traversal_steps", counted ? nlohmann::json(traversal_steps) : nlohmann::json(nullptr)},
@@ -280,7 +281,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
     r.bounds_unoccluded += s.bounds_unoccluded, r.bounds_occluded += s.bounds_occluded, r.bounds_traced += s.bounds_traced;
     r.traversal_steps += s.traversal_steps, r.primitive_tests += s.primitive_tests;
     r.shafts_culled += s.shafts_culled;
-    r.vpl_connections += s.vpl_connections, r.disk_tests += s.disk_tests;
+    r.vpl_connections += s.vpl_connections, r.disk_tests += s.disk_tests, r.disk_clusters += s.disk_clusters;
   }
   integrator->fill_maps(result, std::max(passes, 1));
   result.stats.integrator = integrator->describe();

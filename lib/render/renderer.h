@@ -118,6 +118,9 @@ struct RenderStats {
   std::uint64_t shafts_culled = 0;  ///< bounds: shading points whose light shaft missed every other instance
   std::uint64_t vpl_connections = 0;  ///< vpl: segments from shading points to VPLs (not in shadow_rays)
   std::uint64_t disk_tests = 0;       ///< spheres: sphere disks compared with a segment
+  /// spheres, from RenderOptions::disk_lazy_from instances with sphere sets: clusters of
+  /// balls the tree over them gave a segment (each tested by its bound's cone)
+  std::uint64_t disk_clusters = 0;
   nlohmann::json integrator;          ///< what the integrator reports (vpl: the VPLs, the clamp, the energy it dropped)
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)

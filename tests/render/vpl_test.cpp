@@ -506,6 +506,8 @@ TEST(OccluderDisks, LazyDisksGiveTheImagesOfEveryDisk) {
           EXPECT_EQ(every.image.pixels, lazy.image.pixels) << label;
           EXPECT_LT(lazy.stats.disk_tests, every.stats.disk_tests) << label;  // the tree left disks untested
           EXPECT_GT(lazy.stats.disk_tests, 0u) << label;
+          EXPECT_EQ(every.stats.disk_clusters, 0u) << label;  // no tree to give clusters
+          EXPECT_GT(lazy.stats.disk_clusters, 0u) << label;
         }
     // The direct integrator's shadow rays through the same disks.
     RenderOptions direct{.visibility = VisibilityMode::spheres, .spp = 2, .shadow_rays = 3, .seed = 7};

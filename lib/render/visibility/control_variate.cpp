@@ -155,7 +155,7 @@ void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<co
   // 2. V' from the disks, all ends at once.
   std::vector<std::uint8_t>& proxy = proxy_;
   proxy.resize(m);
-  disks_.occludes(ends, proxy, stats.disk_tests);
+  disks_.occludes(ends, proxy, stats.disk_tests, &stats.disk_clusters);
   // 3. The corrections each connection draws, traced as packets.
   traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
   trace_probability_.assign(m, 0);
@@ -207,7 +207,7 @@ double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProba
     }
   }
   ++stats.proxy_tests;
-  const bool proxy_blocked = disks_.occludes(end, stats.disk_tests);
+  const bool proxy_blocked = disks_.occludes(end, stats.disk_tests, &stats.disk_clusters);
   const double proxy = proxy_blocked ? 0.0 : 1.0;
   const double trace_probability = proxy_blocked ? q.after_hit : q.after_miss;
   *point_.p1_sum += 1 - trace_probability;

@@ -526,7 +526,7 @@ namespace {
 constexpr std::uint32_t kNoGroup = ~std::uint32_t{0}, kNotMade = kNoGroup - 1;
 }  // namespace
 
-bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
+bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t* clusters) {
   if (!index_->lazy()) return disks_.occludes(end, tests);
   const Vertex w = end - x_;
   const double margin = std::ldexp(w.norm(), -8);
@@ -559,6 +559,7 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
         const OccluderDiskIndex::Run run = index_->runs_[r];
         const bool own = static_cast<int>(run.instance) == own_;
         if (own && skip_own_) return false;
+        if (clusters) ++*clusters;
         const SphereCluster& cluster = world.occluder_clusters(run.instance)[run.cluster];
         if (seen_[r] != stamp_) {
           seen_[r] = stamp_;
@@ -586,9 +587,10 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests) {
       });
 }
 
-void PointDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) {
+void PointDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests,
+                          std::uint64_t* clusters) {
   if (!index_->lazy()) return disks_.occludes(ends, hidden, tests);
-  for (std::size_t k = 0; k < ends.size(); ++k) hidden[k] = occludes(ends[k], tests) ? 1 : 0;
+  for (std::size_t k = 0; k < ends.size(); ++k) hidden[k] = occludes(ends[k], tests, clusters) ? 1 : 0;
 }
 
 namespace {
@@ -641,7 +643,7 @@ void OccluderDiskPoint::begin(const ShadingPoint& point) {
 double OccluderDiskPoint::connection(const Vertex& end) {
   RenderStats& stats = *point_.stats;
   ++stats.proxy_tests;
-  if (disks_.occludes(end, stats.disk_tests)) return 0;
+  if (disks_.occludes(end, stats.disk_tests, &stats.disk_clusters)) return 0;
   const unsigned lane = traced_.lane(end);
   if (lane == 0) return 1;
   ++stats.exact_tests;
@@ -654,7 +656,7 @@ void OccluderDiskPoint::connections(std::span<const Vertex> ends, std::span<cons
   stats.proxy_tests += ends.size();
   const RenderWorld& world = shared_.context_.world;
   hidden_.resize(ends.size());
-  disks_.occludes(ends, hidden_, stats.disk_tests);
+  disks_.occludes(ends, hidden_, stats.disk_tests, &stats.disk_clusters);
   const std::uint8_t* const hidden = hidden_.data();
   for (std::size_t i = 0; i < ends.size(); ++i) out[i] = hidden[i] ? 0 : 1;
   if (!any_traced_) return;

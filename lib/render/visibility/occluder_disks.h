@@ -164,8 +164,11 @@ class PointDisks {
  public:
   DiskPartition begin(const OccluderDiskIndex& index, const SurfaceHit& hit, const Vertex& position, bool trace_own,
                       bool own_heuristic, std::size_t grid_from, bool clusters);
-  bool occludes(const Vertex& end, std::uint64_t& tests);
-  void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests);
+  /// Whether a disk hides the segment to `end`; adds the comparisons made to `tests` and,
+  /// with a lazy index, the clusters the tree gave the segment to `clusters`.
+  bool occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t* clusters = nullptr);
+  void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests,
+                std::uint64_t* clusters = nullptr);
   /// Disks made so far (padding not counted).
   std::size_t size() const { return disks_.size(); }
 
