@@ -1,6 +1,10 @@
 #include "visproxy/mesh/mesh_topology.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <string>
 
@@ -31,12 +35,6 @@ class DisjointSets {
  private:
   std::vector<std::uint32_t> parent_;
   std::vector<std::uint32_t> size_;
-};
-
-struct HalfEdge {
-  std::uint64_t key;    // (smaller vertex << 32) | larger vertex
-  std::uint32_t corner;  // 3 * triangle + k: the edge runs from corner k to corner k+1
-  bool forward;          // runs from the smaller vertex to the larger
 };
 
 }  // namespace
@@ -118,68 +116,102 @@ EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
 MeshTopology analyze_topology(const TriangleMesh& mesh) {
   require_topology_size(mesh.triangles.size());
   MeshTopology topology;
-  const std::size_t triangle_count = mesh.triangles.size();
+  const std::vector<Triangle>& triangles = mesh.triangles;
+  const std::size_t corner_count = 3 * triangles.size();
+  if (triangles.empty()) return topology;
+  VertexIndex largest = 0;
+  for (const Triangle& t : triangles) largest = std::max({largest, t[0], t[1], t[2]});
+  if (largest >= mesh.positions.size())
+    throw InvalidInputError("", "a triangle refers to vertex " + std::to_string(largest) + " of a mesh with " +
+                                    std::to_string(mesh.positions.size()) + " vertices");
+  const std::size_t vertex_count = mesh.positions.size();
 
-  std::vector<HalfEdge> half_edges;
-  half_edges.reserve(3 * triangle_count);
-  for (std::size_t t = 0; t < triangle_count; ++t)
-    for (std::uint32_t k = 0; k < 3; ++k) {
-      const VertexIndex from = mesh.triangles[t][k];
-      const VertexIndex to = mesh.triangles[t][(k + 1) % 3];
-      if (from == to) continue;
-      const std::uint64_t low = std::min(from, to);
-      const std::uint64_t high = std::max(from, to);
-      half_edges.push_back({(low << 32) | high, static_cast<std::uint32_t>(3 * t + k), from < to});
-    }
-  std::sort(half_edges.begin(), half_edges.end(),
-            [](const HalfEdge& a, const HalfEdge& b) { return a.key != b.key ? a.key < b.key : a.corner < b.corner; });
-
-  // Corners around a vertex are joined across two-triangle edges; more than one group
-  // left at a vertex means the vertex is non-manifold.
-  DisjointSets corner_fans(3 * triangle_count);
-  auto corner_of = [&](std::uint32_t corner, VertexIndex vertex) {
-    const std::uint32_t base = corner - corner % 3;
-    for (std::uint32_t k = 0; k < 3; ++k)
-      if (mesh.triangles[base / 3][k] == vertex) return base + k;
-    return corner;
-  };
-  for (std::size_t begin = 0; begin < half_edges.size();) {
-    std::size_t end = begin;
-    while (end < half_edges.size() && half_edges[end].key == half_edges[begin].key) ++end;
-    const std::size_t incident = end - begin;
-    ++topology.edges;
-    if (incident == 1) ++topology.boundary_edges;
-    if (incident > 2) ++topology.non_manifold_edges;
-    if (incident == 2) {
-      const HalfEdge& a = half_edges[begin];
-      const HalfEdge& b = half_edges[begin + 1];
-      if (a.forward == b.forward) ++topology.inconsistent_edges;
-      const auto low = static_cast<VertexIndex>(a.key >> 32);
-      const auto high = static_cast<VertexIndex>(a.key & 0xFFFFFFFFu);
-      corner_fans.unite(corner_of(a.corner, low), corner_of(b.corner, low));
-      corner_fans.unite(corner_of(a.corner, high), corner_of(b.corner, high));
-    }
-    begin = end;
+  // Every triangle with an edge at a vertex has a corner there, so each vertex's corners
+  // (grouped by a counting sort) tell all about its edges and its fans, and the vertices
+  // are worked on in parallel. An edge (v, w) is counted at its lower vertex.
+  std::vector<std::uint32_t> start(vertex_count + 1, 0);
+  for (const Triangle& t : triangles)
+    for (const VertexIndex v : t) ++start[v + 1];
+  for (std::size_t v = 0; v < vertex_count; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> corners(corner_count);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t corner = 0; corner < corner_count; ++corner) corners[fill[triangles[corner / 3][corner % 3]]++] = corner;
   }
-
-  std::vector<std::pair<VertexIndex, std::uint32_t>> vertex_fans;  // (vertex, fan) for every corner
-  vertex_fans.reserve(3 * triangle_count);
-  for (std::uint32_t corner = 0; corner < 3 * triangle_count; ++corner)
-    vertex_fans.emplace_back(mesh.triangles[corner / 3][corner % 3], corner_fans.find(corner));
-  std::sort(vertex_fans.begin(), vertex_fans.end());
-  vertex_fans.erase(std::unique(vertex_fans.begin(), vertex_fans.end()), vertex_fans.end());
-  for (std::size_t i = 0; i < vertex_fans.size(); ++i) {
-    const bool first_of_vertex = i == 0 || vertex_fans[i - 1].first != vertex_fans[i].first;
-    if (first_of_vertex) {
-      ++topology.referenced_vertices;
-    } else if (vertex_fans[i - 1].first == vertex_fans[i].first &&
-               (i < 2 || vertex_fans[i - 2].first != vertex_fans[i].first)) {
-      ++topology.non_manifold_vertices;  // count each vertex once, at its second fan
-    }
-  }
-
+  using Counts = std::array<std::size_t, 7>;  // the MeshTopology counts in the order below
+  const Counts counts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, vertex_count, 2048), Counts{},
+      [&](const tbb::blocked_range<std::size_t>& range, Counts sum) {
+        // One use of an edge at v: the other end, v's first corner in the use's triangle
+        // (its local number), and whether the use runs from the lower vertex to the higher.
+        struct Use {
+          VertexIndex other;
+          std::uint32_t corner;
+          bool forward;
+        };
+        std::vector<Use> uses;
+        std::vector<std::uint32_t> fan;  // union-find over v's corners, by local number
+        for (std::size_t vi = range.begin(); vi < range.end(); ++vi) {
+          const auto v = static_cast<VertexIndex>(vi);
+          const std::uint32_t* const first = corners.data() + start[v];
+          const std::size_t count = start[v + 1] - start[v];
+          if (count == 0) continue;
+          ++sum[0];  // referenced
+          uses.clear();
+          fan.resize(count);
+          for (std::uint32_t i = 0; i < count; ++i) {
+            fan[i] = i;
+            const std::uint32_t corner = first[i], base = corner - corner % 3;
+            const Triangle& t = triangles[corner / 3];
+            // The local number of the triangle's first corner at v (the group lists corners
+            // in increasing order, so those of one triangle are next to each other).
+            std::uint32_t local = i;
+            while (local > 0 && first[local - 1] >= base) --local;
+            const int k = static_cast<int>(corner % 3);
+            const VertexIndex next = t[(k + 1) % 3], previous = t[(k + 2) % 3];
+            if (next != v) uses.push_back({next, local, v < next});              // the edge from this corner
+            if (previous != v) uses.push_back({previous, local, previous < v});  // the edge into it
+          }
+          std::sort(uses.begin(), uses.end(), [](const Use& a, const Use& b) {
+            return a.other != b.other ? a.other < b.other : a.corner < b.corner;
+          });
+          const auto root = [&](std::uint32_t i) {
+            while (fan[i] != i) i = fan[i] = fan[fan[i]];
+            return i;
+          };
+          for (std::size_t b = 0; b < uses.size();) {
+            std::size_t e = b;
+            std::size_t forward = 0;
+            for (; e < uses.size() && uses[e].other == uses[b].other; ++e) forward += uses[e].forward ? 1 : 0;
+            const std::size_t incident = e - b;
+            if (incident == 2) fan[root(uses[b].corner)] = root(uses[b + 1].corner);
+            if (uses[b].other > v) {
+              ++sum[1];                                                        // edges
+              if (incident == 1) ++sum[2];                                     // boundary
+              if (incident > 2) ++sum[3];                                      // non-manifold
+              if (incident == 2 && uses[b].forward == uses[b + 1].forward) ++sum[4];  // inconsistent
+              if (2 * forward != incident) ++sum[5];                           // unbalanced
+            }
+            b = e;
+          }
+          std::size_t fans = 0;
+          for (std::uint32_t i = 0; i < count; ++i) fans += root(i) == i ? 1 : 0;
+          if (fans > 1) ++sum[6];  // non-manifold vertex
+        }
+        return sum;
+      },
+      [](Counts a, const Counts& b) {
+        for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+        return a;
+      });
+  topology.referenced_vertices = counts[0];
+  topology.edges = counts[1];
+  topology.boundary_edges = counts[2];
+  topology.non_manifold_edges = counts[3];
+  topology.inconsistent_edges = counts[4];
+  topology.unbalanced_edges = counts[5];
+  topology.non_manifold_vertices = counts[6];
   triangle_components(mesh, &topology.components);
-  topology.unbalanced_edges = check_edge_balance(mesh).unbalanced_edges;
   return topology;
 }
 

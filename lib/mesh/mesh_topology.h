@@ -41,7 +41,9 @@ inline constexpr std::size_t kMaxTopologyTriangles = 0xFFFFFFFFull / 3;
 void require_topology_size(std::size_t triangles);
 
 /// Edge and vertex structure of `mesh`. Edges from a triangle to itself (a triangle with
-/// a repeated index) are ignored. O(#F log #F).
+/// a repeated index) are ignored. Linear in #F and #V but for sorts of each vertex's
+/// edges and corners. Throws InvalidInputError (empty file name) for a triangle that
+/// refers to a vertex beyond the positions.
 MeshTopology analyze_topology(const TriangleMesh& mesh);
 
 /// Whether every edge is used as often in one direction as in the other: the condition

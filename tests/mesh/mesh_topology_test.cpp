@@ -4,6 +4,10 @@
 
 #include <array>
 #include <map>
+#include <numeric>
+#include <set>
+#include <string>
+#include <vector>
 #include <optional>
 
 #include "visproxy/core/errors.h"
@@ -115,6 +119,131 @@ TEST(EdgeBalance, AgreesWithAPlainCountOnTornMeshes) {
       EXPECT_EQ(balance.first_forward, (uses[*first][0])) << round;
       EXPECT_EQ(balance.first_backward, (uses[*first][1])) << round;
     }
+  }
+}
+
+// The topology by plain maps and one union-find over every corner, as the definitions
+// read: the reference analyze_topology() must match, whatever the defects.
+MeshTopology plain_topology(const TriangleMesh& mesh) {
+  MeshTopology topology;
+  struct Use {
+    std::size_t triangle;
+    bool forward;
+  };
+  std::map<std::pair<VertexIndex, VertexIndex>, std::vector<Use>> uses;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const VertexIndex a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      if (a != b) uses[{std::min(a, b), std::max(a, b)}].push_back({t, a < b});
+    }
+  std::vector<std::size_t> parent(3 * mesh.triangles.size());
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto find = [&](std::size_t i) {
+    while (parent[i] != i) i = parent[i];
+    return i;
+  };
+  const auto first_corner = [&](std::size_t t, VertexIndex v) {
+    for (std::size_t k = 0; k < 3; ++k)
+      if (mesh.triangles[t][k] == v) return 3 * t + k;
+    return std::size_t{0};
+  };
+  for (const auto& [edge, list] : uses) {
+    ++topology.edges;
+    std::size_t forward = 0;
+    for (const Use& use : list) forward += use.forward ? 1 : 0;
+    if (list.size() == 1) ++topology.boundary_edges;
+    if (list.size() > 2) ++topology.non_manifold_edges;
+    if (2 * forward != list.size()) ++topology.unbalanced_edges;
+    if (list.size() != 2) continue;
+    if (list[0].forward == list[1].forward) ++topology.inconsistent_edges;
+    for (const VertexIndex end : {edge.first, edge.second})
+      parent[find(first_corner(list[0].triangle, end))] = find(first_corner(list[1].triangle, end));
+  }
+  std::map<VertexIndex, std::set<std::size_t>> fans;
+  for (std::size_t corner = 0; corner < parent.size(); ++corner) fans[mesh.triangles[corner / 3][corner % 3]].insert(find(corner));
+  topology.referenced_vertices = fans.size();
+  for (const auto& [vertex, roots] : fans) topology.non_manifold_vertices += roots.size() > 1 ? 1 : 0;
+  triangle_components(mesh, &topology.components);
+  return topology;
+}
+
+void expect_same_topology(const MeshTopology& got, const MeshTopology& want, const std::string& label) {
+  EXPECT_EQ(got.referenced_vertices, want.referenced_vertices) << label;
+  EXPECT_EQ(got.edges, want.edges) << label;
+  EXPECT_EQ(got.boundary_edges, want.boundary_edges) << label;
+  EXPECT_EQ(got.non_manifold_edges, want.non_manifold_edges) << label;
+  EXPECT_EQ(got.non_manifold_vertices, want.non_manifold_vertices) << label;
+  EXPECT_EQ(got.inconsistent_edges, want.inconsistent_edges) << label;
+  EXPECT_EQ(got.components, want.components) << label;
+  EXPECT_EQ(got.unbalanced_edges, want.unbalanced_edges) << label;
+}
+
+// Torn, flipped, duplicated, pinched (two vertices made one: bow ties and non-manifold
+// edges) and collapsed (a repeated index) triangles on a closed 768-triangle sphere.
+TEST(MeshTopology, AgreesWithPlainMapsOnTornMeshes) {
+  TriangleMesh sphere = testing::unit_cube();
+  for (int level = 0; level < 3; ++level) {
+    TriangleMesh finer;
+    finer.positions = sphere.positions;
+    for (const Triangle& t : sphere.triangles) {
+      VertexIndex m[3];
+      for (int k = 0; k < 3; ++k) {
+        m[k] = static_cast<VertexIndex>(finer.positions.size());
+        finer.positions.push_back((sphere.positions[t[k]] + sphere.positions[t[(k + 1) % 3]]) / 2);
+      }
+      finer.triangles.insert(finer.triangles.end(), {{t[0], m[0], m[2]}, {m[0], t[1], m[1]}, {m[2], m[1], t[2]}, {m[0], m[1], m[2]}});
+    }
+    sphere = weld_vertices(finer);
+  }
+  expect_same_topology(analyze_topology(sphere), plain_topology(sphere), "sphere");
+  // Collapsed triangles alone: an edge used twice by one triangle joins no fans, so the
+  // triangle's two corners at a vertex stay two fans.
+  for (const std::vector<Triangle>& triangles : std::vector<std::vector<Triangle>>{{{0, 0, 1}}, {{0, 1, 0}, {0, 1, 2}}, {{1, 1, 1}}}) {
+    TriangleMesh collapsed;
+    collapsed.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    collapsed.triangles = triangles;
+    const MeshTopology want = plain_topology(collapsed);
+    expect_same_topology(analyze_topology(collapsed), want, "collapsed " + std::to_string(triangles.size()));
+    if (triangles.size() == 1 && triangles[0][0] != triangles[0][2]) EXPECT_EQ(want.non_manifold_vertices, 1u);
+  }
+  EXPECT_EQ(analyze_topology(sphere).boundary_edges, 0u);
+  std::uint64_t state = 777;
+  auto next = [&](std::uint64_t n) { state = state * 6364136223846793005ull + 1442695040888963407ull; return (state >> 33) % n; };
+  std::size_t seen[5] = {};  // rounds with boundary, non-manifold edges, non-manifold vertices, inconsistent, unbalanced
+  for (int round = 0; round < 60; ++round) {
+    TriangleMesh torn = sphere;
+    for (int k = 0; k < 1 + round / 4; ++k) {
+      const std::size_t t = next(torn.triangles.size());
+      switch (next(5)) {
+        case 0: torn.triangles.erase(torn.triangles.begin() + static_cast<std::ptrdiff_t>(t)); break;
+        case 1: std::swap(torn.triangles[t][0], torn.triangles[t][1]); break;
+        case 2: torn.triangles.push_back(torn.triangles[t]); break;
+        case 3: {  // pinch: every use of one vertex becomes another's
+          const auto from = static_cast<VertexIndex>(next(torn.positions.size())), to = static_cast<VertexIndex>(next(torn.positions.size()));
+          for (Triangle& triangle : torn.triangles)
+            for (VertexIndex& v : triangle)
+              if (v == from) v = to;
+          break;
+        }
+        default: torn.triangles[t][next(3)] = torn.triangles[t][next(3)]; break;  // collapse a corner onto another
+      }
+    }
+    const MeshTopology got = analyze_topology(torn), want = plain_topology(torn);
+    expect_same_topology(got, want, "round " + std::to_string(round));
+    seen[0] += want.boundary_edges > 0, seen[1] += want.non_manifold_edges > 0, seen[2] += want.non_manifold_vertices > 0;
+    seen[3] += want.inconsistent_edges > 0, seen[4] += want.unbalanced_edges > 0;
+  }
+  for (const std::size_t rounds : seen) EXPECT_GE(rounds, 5u);  // every kind of defect was met
+}
+
+TEST(MeshTopology, ATriangleBeyondThePositionsIsRefused) {
+  TriangleMesh mesh = testing::tetrahedron();
+  mesh.triangles.push_back({0, 1, 7});
+  try {
+    analyze_topology(mesh);
+    FAIL() << "no error";
+  } catch (const InvalidInputError& error) {
+    EXPECT_NE(std::string(error.what()).find("vertex 7 of a mesh with 4 vertices"), std::string::npos) << error.what();
   }
 }
 
