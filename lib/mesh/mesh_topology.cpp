@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <vector>
 #include <numeric>
 #include <string>
 
@@ -37,6 +38,64 @@ class DisjointSets {
   std::vector<std::uint32_t> size_;
 };
 
+// Each vertex's corners (3 * triangle + k, with the triangle's next and previous
+// vertices), in increasing order: corners[start[v], start[v + 1]). A counting sort:
+// linear, with one scattered write per corner, and the work on a vertex then reads only
+// its own corners. Every index must be below vertex_count.
+struct Corner {
+  std::uint32_t corner;
+  VertexIndex next, previous;
+};
+struct CornersByVertex {
+  std::vector<std::uint32_t> start;
+  std::vector<Corner> corners;
+};
+
+CornersByVertex corners_by_vertex(const std::vector<Triangle>& triangles, std::size_t vertex_count) {
+  CornersByVertex by;
+  by.start.assign(vertex_count + 1, 0);
+  for (const Triangle& t : triangles)
+    for (const VertexIndex v : t) ++by.start[v + 1];
+  for (std::size_t v = 0; v < vertex_count; ++v) by.start[v + 1] += by.start[v];
+  by.corners.resize(3 * triangles.size());
+  std::vector<std::uint32_t> fill(by.start.begin(), by.start.end() - 1);
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    const Triangle& triangle = triangles[t];
+    by.corners[fill[triangle[0]]++] = {3 * t, triangle[1], triangle[2]};
+    by.corners[fill[triangle[1]]++] = {3 * t + 1, triangle[2], triangle[0]};
+    by.corners[fill[triangle[2]]++] = {3 * t + 2, triangle[0], triangle[1]};
+  }
+  return by;
+}
+
+// One use of an edge at a vertex v: the other end, v's first corner in the use's triangle
+// (its number among v's corners), and whether the use runs from the lower vertex to the
+// higher.
+struct EdgeUse {
+  VertexIndex other;
+  std::uint32_t corner;
+  bool forward;
+};
+
+// The uses of the edges at v (every triangle with an edge at v has a corner there), from
+// its `count` corners at `first`, sorted by (other end, corner). Edges from a vertex to
+// itself are left out.
+void edge_uses_at(VertexIndex v, const Corner* first, std::size_t count, std::vector<EdgeUse>& uses) {
+  uses.clear();
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint32_t base = first[i].corner - first[i].corner % 3;
+    // The triangle's first corner at v: v's corners come in increasing order, so those of
+    // one triangle are next to each other.
+    std::uint32_t local = i;
+    while (local > 0 && first[local - 1].corner >= base) --local;
+    const VertexIndex next = first[i].next, previous = first[i].previous;
+    if (next != v) uses.push_back({next, local, v < next});              // the edge from this corner
+    if (previous != v) uses.push_back({previous, local, previous < v});  // the edge into it
+  }
+  std::sort(uses.begin(), uses.end(),
+            [](const EdgeUse& a, const EdgeUse& b) { return a.other != b.other ? a.other < b.other : a.corner < b.corner; });
+}
+
 }  // namespace
 
 void require_topology_size(std::size_t triangles) {
@@ -48,10 +107,10 @@ void require_topology_size(std::size_t triangles) {
 EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
   require_topology_size(mesh.triangles.size());
   EdgeBalance balance;
-  // Each use of an edge (low, high) as (high << 1 | backward), grouped by its low vertex
-  // (a counting sort), then sorted within the group: the edges come in (low, high) order,
-  // in linear time but for the small sorts. Indices beyond the vertices (a malformed mesh)
-  // are grouped by one sort of whole keys instead.
+  // The edges at each vertex from its corners, in linear time but for the small sorts of
+  // each vertex's edges. Indices beyond the vertices (a malformed mesh) are grouped by one
+  // sort of whole keys, each use of an edge (low, high) as (low << 33 | high << 1 |
+  // backward), instead.
   VertexIndex largest = 0;
   for (const Triangle& t : mesh.triangles) largest = std::max({largest, t[0], t[1], t[2]});
   auto tally = [&](VertexIndex low, const std::uint64_t* begin, const std::uint64_t* end) {
@@ -70,28 +129,39 @@ EdgeBalance check_edge_balance(const TriangleMesh& mesh) {
     }
   };
   if (!mesh.triangles.empty() && largest < mesh.positions.size()) {
-    std::vector<std::uint32_t> start(static_cast<std::size_t>(largest) + 2, 0);
-    for (const Triangle& t : mesh.triangles)
-      for (int k = 0; k < 3; ++k)
-        if (t[k] != t[(k + 1) % 3]) ++start[std::min(t[k], t[(k + 1) % 3]) + 1];
-    for (std::size_t v = 0; v + 1 < start.size(); ++v) start[v + 1] += start[v];
-    std::vector<std::uint64_t> uses(start.back());
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (const Triangle& t : mesh.triangles)
-      for (int k = 0; k < 3; ++k) {
-        const VertexIndex a = t[k], b = t[(k + 1) % 3];
-        if (a == b) continue;
-        uses[fill[std::min(a, b)]++] = (static_cast<std::uint64_t>(std::max(a, b)) << 1) | (a > b ? 1u : 0u);
-      }
-    for (std::size_t v = 0; v + 1 < start.size(); ++v) {
-      std::uint64_t* begin = uses.data() + start[v];
-      std::uint64_t* end = uses.data() + start[v + 1];
-      std::sort(begin, end);
-      tally(static_cast<VertexIndex>(v), begin, end);
-    }
+    // Vertex by vertex in parallel (edge_uses_at); the edges at v above v are its own.
+    const CornersByVertex by = corners_by_vertex(mesh.triangles, mesh.positions.size());
+    struct Found {
+      std::size_t unbalanced = 0;
+      EdgeBalance first;  // at the lowest vertex with an unbalanced edge
+    };
+    const Found found = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, mesh.positions.size(), 2048), Found{},
+        [&](const tbb::blocked_range<std::size_t>& range, Found sum) {
+          std::vector<EdgeUse> uses;
+          for (std::size_t vi = range.begin(); vi < range.end(); ++vi) {
+            const auto v = static_cast<VertexIndex>(vi);
+            edge_uses_at(v, by.corners.data() + by.start[v], by.start[v + 1] - by.start[v], uses);
+            for (std::size_t b = 0; b < uses.size();) {
+              std::size_t e = b, forward = 0;
+              for (; e < uses.size() && uses[e].other == uses[b].other; ++e) forward += uses[e].forward ? 1 : 0;
+              if (uses[b].other > v && 2 * forward != e - b && sum.unbalanced++ == 0)
+                sum.first = {0, v, uses[b].other, forward, e - b - forward};
+              b = e;
+            }
+          }
+          return sum;
+        },
+        [](Found a, const Found& b) {  // ranges join in order: a is the lower
+          if (a.unbalanced == 0) a.first = b.first;
+          a.unbalanced += b.unbalanced;
+          return a;
+        });
+    balance = found.first;
+    balance.unbalanced_edges = found.unbalanced;
     return balance;
   }
-  // (low << 33 | high << 1 | backward): equal edges sort together.
+  // Equal edges sort together.
   std::vector<std::uint64_t> uses;
   uses.reserve(3 * mesh.triangles.size());
   for (const Triangle& t : mesh.triangles)
@@ -117,7 +187,6 @@ MeshTopology analyze_topology(const TriangleMesh& mesh) {
   require_topology_size(mesh.triangles.size());
   MeshTopology topology;
   const std::vector<Triangle>& triangles = mesh.triangles;
-  const std::size_t corner_count = 3 * triangles.size();
   if (triangles.empty()) return topology;
   VertexIndex largest = 0;
   for (const Triangle& t : triangles) largest = std::max({largest, t[0], t[1], t[2]});
@@ -126,59 +195,29 @@ MeshTopology analyze_topology(const TriangleMesh& mesh) {
                                     std::to_string(mesh.positions.size()) + " vertices");
   const std::size_t vertex_count = mesh.positions.size();
 
-  // Every triangle with an edge at a vertex has a corner there, so each vertex's corners
-  // (grouped by a counting sort) tell all about its edges and its fans, and the vertices
-  // are worked on in parallel. An edge (v, w) is counted at its lower vertex.
-  std::vector<std::uint32_t> start(vertex_count + 1, 0);
-  for (const Triangle& t : triangles)
-    for (const VertexIndex v : t) ++start[v + 1];
-  for (std::size_t v = 0; v < vertex_count; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> corners(corner_count);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::uint32_t corner = 0; corner < corner_count; ++corner) corners[fill[triangles[corner / 3][corner % 3]]++] = corner;
-  }
+  // Vertex by vertex in parallel, from each vertex's corners (edge_uses_at); an edge
+  // (v, w) is counted at its lower vertex.
+  const CornersByVertex by = corners_by_vertex(triangles, vertex_count);
   using Counts = std::array<std::size_t, 7>;  // the MeshTopology counts in the order below
   const Counts counts = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, vertex_count, 2048), Counts{},
       [&](const tbb::blocked_range<std::size_t>& range, Counts sum) {
-        // One use of an edge at v: the other end, v's first corner in the use's triangle
-        // (its local number), and whether the use runs from the lower vertex to the higher.
-        struct Use {
-          VertexIndex other;
-          std::uint32_t corner;
-          bool forward;
-        };
-        std::vector<Use> uses;
-        std::vector<std::uint32_t> fan;  // union-find over v's corners, by local number
+        std::vector<EdgeUse> uses;
+        std::vector<std::uint32_t> fan;  // union-find over v's corners, by their number
         for (std::size_t vi = range.begin(); vi < range.end(); ++vi) {
           const auto v = static_cast<VertexIndex>(vi);
-          const std::uint32_t* const first = corners.data() + start[v];
-          const std::size_t count = start[v + 1] - start[v];
+          const std::size_t count = by.start[v + 1] - by.start[v];
           if (count == 0) continue;
           ++sum[0];  // referenced
-          uses.clear();
+          edge_uses_at(v, by.corners.data() + by.start[v], count, uses);
           fan.resize(count);
-          for (std::uint32_t i = 0; i < count; ++i) {
-            fan[i] = i;
-            const std::uint32_t corner = first[i], base = corner - corner % 3;
-            const Triangle& t = triangles[corner / 3];
-            // The local number of the triangle's first corner at v (the group lists corners
-            // in increasing order, so those of one triangle are next to each other).
-            std::uint32_t local = i;
-            while (local > 0 && first[local - 1] >= base) --local;
-            const int k = static_cast<int>(corner % 3);
-            const VertexIndex next = t[(k + 1) % 3], previous = t[(k + 2) % 3];
-            if (next != v) uses.push_back({next, local, v < next});              // the edge from this corner
-            if (previous != v) uses.push_back({previous, local, previous < v});  // the edge into it
-          }
-          std::sort(uses.begin(), uses.end(), [](const Use& a, const Use& b) {
-            return a.other != b.other ? a.other < b.other : a.corner < b.corner;
-          });
+          std::iota(fan.begin(), fan.end(), std::uint32_t{0});
           const auto root = [&](std::uint32_t i) {
             while (fan[i] != i) i = fan[i] = fan[fan[i]];
             return i;
           };
+          // Corners around v are joined across two-triangle edges; more than one fan left
+          // means v is non-manifold.
           for (std::size_t b = 0; b < uses.size();) {
             std::size_t e = b;
             std::size_t forward = 0;
