@@ -5,11 +5,15 @@
 #include <CGAL/Extreme_points_traits_adapter_3.h>
 #include <CGAL/convex_hull_3.h>
 #include <CGAL/property_map.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <unordered_map>
 #include <array>
 #include <numeric>
@@ -39,7 +43,107 @@ struct CoordinatesHash {
   }
 };
 
+// hull_candidates() (Akl and Toussaint, "A fast convex hull algorithm", 1978). The hull of
+// the extreme points is exact (CGAL's), and a point is dropped only when it is certainly
+// below every face's CertainPlane, with the diagonal of the points' box as the reach.
+// Deterministic: ties go to the lowest index.
+std::vector<std::size_t> candidates_of(const std::vector<Kernel::Point_3>& points) {
+  std::vector<std::size_t> all(points.size());
+  std::iota(all.begin(), all.end(), std::size_t{0});
+  std::vector<Vertex> directions;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z)
+        if (x != 0 || y != 0 || z != 0) directions.emplace_back(x, y, z);
+  struct Extremes {
+    std::array<double, 26> value;
+    std::array<std::size_t, 26> index;
+    BoundingBox box;
+  };
+  Extremes none;
+  none.value.fill(-std::numeric_limits<double>::infinity());
+  none.index.fill(points.size());
+  const Extremes found = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), 4096), none,
+      [&](const tbb::blocked_range<std::size_t>& range, Extremes e) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+          const Vertex p(points[i].x(), points[i].y(), points[i].z());
+          e.box.extend(p);
+          for (std::size_t d = 0; d < 26; ++d) {
+            const double v = directions[d].dot(p);
+            if (v > e.value[d]) e.value[d] = v, e.index[d] = i;  // ranges come in order: the first wins ties
+          }
+        }
+        return e;
+      },
+      [](Extremes a, const Extremes& b) {
+        for (std::size_t d = 0; d < 26; ++d)
+          if (b.value[d] > a.value[d] || (b.value[d] == a.value[d] && b.index[d] < a.index[d]))
+            a.value[d] = b.value[d], a.index[d] = b.index[d];
+        a.box.extend(b.box.min), a.box.extend(b.box.max);
+        return a;
+      });
+  std::vector<std::size_t> corners(found.index.begin(), found.index.end());
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  if (corners.empty() || corners.back() >= points.size() || corners.size() < 4) return all;
+  std::vector<Kernel::Point_3> inner_points;
+  for (const std::size_t i : corners) inner_points.push_back(points[i]);
+  CGAL::Surface_mesh<Kernel::Point_3> inner;
+  CGAL::convex_hull_3(inner_points.begin(), inner_points.end(), inner);
+  if (inner.number_of_faces() < 4) return all;  // flat: nothing is strictly inside
+  const double diagonal = (found.box.max - found.box.min).norm();
+  Vertex centroid = Vertex::Zero();
+  for (const auto v : inner.vertices()) centroid += Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
+  centroid /= static_cast<double>(inner.number_of_vertices());
+  std::vector<CertainPlane> planes;
+  for (const auto face : inner.faces()) {
+    std::array<Vertex, 3> corner;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(inner.halfedge(face), inner)) {
+      if (k == 3) return all;
+      corner[static_cast<std::size_t>(k++)] = Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
+    }
+    if (k != 3) return all;
+    const std::optional<CertainPlane> plane = CertainPlane::through(corner[0], corner[1], corner[2], diagonal);
+    // CGAL orients the faces outwards; the centroid, strictly inside, must say so.
+    if (!plane || !plane->certainly_below(centroid)) return all;
+    planes.push_back(*plane);
+  }
+  std::vector<std::uint8_t> keep(points.size(), 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      const Vertex p(points[i].x(), points[i].y(), points[i].z());
+      bool inside = true;
+      for (const CertainPlane& plane : planes)
+        if (!plane.certainly_below(p)) {
+          inside = false;
+          break;
+        }
+      keep[i] = inside ? 0 : 1;
+    }
+  });
+  std::vector<std::size_t> kept;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (keep[i]) kept.push_back(i);
+  return kept;
+}
+
 }  // namespace
+
+std::optional<CertainPlane> CertainPlane::through(const Vertex& a, const Vertex& b, const Vertex& c, double reach) {
+  const Vertex u = b - a, v = c - a;
+  CertainPlane plane{a, u.cross(v), 1e-12 * u.norm() * v.norm() * reach};
+  if (!std::isnormal(plane.slack) || !plane.normal.allFinite()) return std::nullopt;
+  return plane;
+}
+
+std::vector<std::size_t> hull_candidates(const std::vector<Vertex>& points) {
+  std::vector<Kernel::Point_3> cgal_points;
+  cgal_points.reserve(points.size());
+  for (const Vertex& p : points) cgal_points.push_back(point(p));
+  return candidates_of(cgal_points);
+}
 
 std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
   std::vector<Kernel::Point_3> cgal_points;
@@ -50,16 +154,19 @@ std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
   // Many points: the hull's corners of each of a few slices of them, in parallel, then the
   // hull of those corners alone, which is the hull of all (every corner of the whole is a
   // corner of its slice). The slices and the order of the corners are fixed by the input.
+  // Before that, the points certainly inside the hull of a few extreme ones are dropped
+  // (hull_candidates).
   constexpr std::size_t kSliceFrom = 200'000;
   std::vector<std::size_t> kept;  // when sliced: the input index of each of cgal_points
   if (cgal_points.size() >= kSliceFrom) {
+    const std::vector<std::size_t> candidates = candidates_of(cgal_points);
     const std::size_t slices = 8;
     std::vector<std::vector<std::size_t>> corners(slices);
     const auto point_of = CGAL::make_property_map(cgal_points);
     tbb::parallel_for(std::size_t{0}, slices, [&](std::size_t k) {
-      const std::size_t begin = cgal_points.size() * k / slices, end = cgal_points.size() * (k + 1) / slices;
-      std::vector<std::size_t> slice(end - begin);
-      std::iota(slice.begin(), slice.end(), begin);
+      const std::size_t begin = candidates.size() * k / slices, end = candidates.size() * (k + 1) / slices;
+      std::vector<std::size_t> slice(candidates.begin() + static_cast<std::ptrdiff_t>(begin),
+                                     candidates.begin() + static_cast<std::ptrdiff_t>(end));
       try {
         CGAL::extreme_points_3(slice, std::back_inserter(corners[k]), CGAL::make_extreme_points_traits_adapter(point_of));
       } catch (const std::exception&) {
@@ -76,7 +183,6 @@ std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points) {
   }
   CGAL::Surface_mesh<Kernel::Point_3> hull;
   CGAL::convex_hull_3(cgal_points.begin(), cgal_points.end(), hull);
-
   // The hull over input indices (the first input point at each corner). CGAL's vertex and
   // face order depends on memory addresses.
   std::unordered_map<std::array<double, 3>, VertexIndex, CoordinatesHash> index_of_point;

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "visproxy/mesh/triangle_mesh.h"
@@ -17,6 +18,28 @@ namespace visproxy::hull_detail {
 /// (points inside, on a face or on an edge are left out); each planar facet is fanned
 /// from its lowest-index corner; the triangles are sorted.
 std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points);
+
+/// The oriented plane through a, b and c, with the test hull_candidates() drops points by:
+/// a point p within `reach` of a is certainly strictly below it (opposite to (b - a) x
+/// (c - a)) when (b - a) x (c - a) . (p - a), computed in double, is below -slack, with
+/// slack = 1e-12 |b - a| |c - a| reach. The rounding of the differences, the cross product
+/// and the dot product stays under 1e-14 of that, relative to the differences (so far from
+/// the origin too), and products that fall below the normal numbers err by less than the
+/// smallest normal slack.
+struct CertainPlane {
+  Vertex a = Vertex::Zero(), normal = Vertex::Zero();
+  double slack = 0;
+  /// No plane when the slack is not a normal number or the normal is not finite
+  /// (coordinates so small or so large that the products underflow or overflow).
+  static std::optional<CertainPlane> through(const Vertex& a, const Vertex& b, const Vertex& c, double reach);
+  bool certainly_below(const Vertex& p) const { return normal.dot(p - a) < -slack; }
+};
+
+/// The points exact_convex_hull() looks at among many (indices, ascending): all but those
+/// certainly strictly inside the hull of the points extreme along the 26 directions of a
+/// cube's faces, edges and corners (Akl and Toussaint's heuristic); all of them when that
+/// hull is flat or its planes do not fit in double precision.
+std::vector<std::size_t> hull_candidates(const std::vector<Vertex>& points);
 
 /// Planar facet of each triangle of a closed, manifold triangle mesh (#F entries, numbered
 /// 0.. in order of first appearance): two triangles that share an edge are in one facet

@@ -1,6 +1,7 @@
 #include "visproxy/proxy/convex_hull.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -14,6 +15,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/proxy/hull_facets.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"
@@ -223,6 +225,212 @@ TEST(ConvexHull, ManyPointsGiveTheHullOfAll) {
   std::sort(got.begin(), got.end());
   EXPECT_EQ(got, expected);
   EXPECT_TRUE(contains_every_vertex(round.mesh, fan_over(ball)));
+}
+
+// Over 200 000 points, the points certainly inside the hull of those extreme along 26
+// directions are dropped first. Thousands of points lie on that inner hull's faces and
+// near them on both sides, about the origin and 10^6 away (where rounding moves them by
+// more than that): within 1e-16 to 1e-15, where the double-precision test errs and those
+// outside are corners of the whole, or within 1e-13 to 1e-9. The corners must still be
+// CGAL's, for every point.
+TEST(ConvexHull, PointsAtTheInnerHullsFacesKeepTheCornersOfAll) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  // The extremes: a cube's corners, its face centres pushed out and its edges' middles
+  // pushed out.
+  std::vector<Vertex> extremes;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z) {
+        const int nonzero = (x != 0) + (y != 0) + (z != 0);
+        if (nonzero == 0) continue;
+        const double push = nonzero == 1 ? 1.25 : nonzero == 2 ? 1.125 : 1.0;  // dyadic: points on faces are exact
+        extremes.push_back(push * Vertex(x, y, z));
+      }
+  std::vector<Kernel::Point_3> inner_points;
+  for (const Vertex& p : extremes) inner_points.emplace_back(p.x(), p.y(), p.z());
+  CGAL::Surface_mesh<Kernel::Point_3> inner;
+  CGAL::convex_hull_3(inner_points.begin(), inner_points.end(), inner);
+  std::vector<std::array<Vertex, 3>> faces;
+  for (const auto face : inner.faces()) {
+    std::array<Vertex, 3> corners;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(inner.halfedge(face), inner))
+      corners[static_cast<std::size_t>(k++)] = Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
+    faces.push_back(corners);
+  }
+  ASSERT_GE(faces.size(), 24u);
+  for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(1e6, -2e6, 3e6)})
+  for (const std::vector<double>& distances : {std::vector<double>{0.0}, std::vector<double>{-1e-9, -1e-13, 0.0, 1e-13, 1e-9}}) {
+    Random random(17);
+    std::vector<Vertex> points;
+    for (int i = 0; i < 210000; ++i)
+      points.push_back(offset + Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5));
+    for (const Vertex& p : extremes) points.push_back(offset + p);
+    std::size_t near = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const std::array<Vertex, 3>& f = faces[static_cast<std::size_t>(random.uniform() * static_cast<double>(faces.size())) % faces.size()];
+      // Weights in 1/1024ths: the point lies exactly on the face.
+      double a = std::floor(1024 * random.uniform()) / 1024, b = std::floor(1024 * random.uniform()) / 1024;
+      if (a + b > 1) a = 1 - a, b = 1 - b;
+      const Vertex on = offset + f[0] + a * (f[1] - f[0]) + b * (f[2] - f[0]);
+      const Vertex normal = (f[1] - f[0]).cross(f[2] - f[0]).normalized();
+      for (const double d : distances) {
+        if (d != 0) {
+          points.push_back(on + d * normal), ++near;
+          continue;
+        }
+        // On the face, and one unit in the last place off it on either side along each
+        // axis the face's normal leans on: where the double-precision test errs.
+        points.push_back(on), ++near;
+        for (int axis = 0; axis < 3; ++axis) {
+          if (std::abs(normal[axis]) < 0.1) continue;
+          for (const double towards : {-1e300, 1e300}) {
+            Vertex nudged = on;
+            nudged[axis] = std::nextafter(on[axis], towards);
+            points.push_back(nudged);
+          }
+        }
+      }
+    }
+    const ConvexHullResult hull = build_convex_hull(fan_over(points));
+    std::vector<Kernel::Point_3> all;
+    for (const Vertex& p : points) all.emplace_back(p.x(), p.y(), p.z());
+    std::vector<Kernel::Point_3> extreme;
+    CGAL::extreme_points_3(all, std::back_inserter(extreme));
+    std::vector<std::array<double, 3>> expected, got;
+    for (const Kernel::Point_3& p : extreme) expected.push_back({p.x(), p.y(), p.z()});
+    for (const Vertex& p : hull.mesh.positions) got.push_back({p.x(), p.y(), p.z()});
+    std::sort(expected.begin(), expected.end());
+    std::sort(got.begin(), got.end());
+    const std::string label = "offset " + std::to_string(offset.x()) + (distances.size() == 1 ? ", within an ulp" : ", within 1e-9");
+    EXPECT_EQ(got, expected) << label;
+    // The near points made corners of their own: the hull has more than the extremes.
+    EXPECT_GT(got.size(), 2 * extremes.size()) << label << ": " << got.size() << " corners";
+    EXPECT_EQ(near, 3000 * distances.size());
+  }
+}
+
+// The claim itself: every point hull_candidates() drops is strictly inside the hull of
+// those it keeps (exact orientations). Points on the faces of the extreme points' hull,
+// exactly (dyadic weights of dyadic corners) or within rounding (any weights), lie on or
+// outside the hull of the others. Coordinates of 10^-110 and 10^-300, where the planes'
+// products underflow, must drop nothing.
+TEST(ConvexHull, CandidatesDropOnlyPointsStrictlyInside) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::vector<Vertex> extremes;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z) {
+        const int nonzero = (x != 0) + (y != 0) + (z != 0);
+        if (nonzero > 0) extremes.push_back((nonzero == 1 ? 1.25 : nonzero == 2 ? 1.125 : 1.0) * Vertex(x, y, z));
+      }
+  std::vector<Kernel::Point_3> inner_points;
+  for (const Vertex& p : extremes) inner_points.emplace_back(p.x(), p.y(), p.z());
+  CGAL::Surface_mesh<Kernel::Point_3> inner;
+  CGAL::convex_hull_3(inner_points.begin(), inner_points.end(), inner);
+  std::vector<std::array<Vertex, 3>> faces;
+  for (const auto face : inner.faces()) {
+    std::array<Vertex, 3> corners;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(inner.halfedge(face), inner))
+      corners[static_cast<std::size_t>(k++)] = Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
+    faces.push_back(corners);
+  }
+  for (const double scale : {1.0, 1e-110, 1e-300})
+    for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(1e6, -2e6, 3e6)}) {
+      if (scale != 1.0 && offset.x() != 0) continue;
+      Random random(23);
+      std::vector<Vertex> points;
+      for (const Vertex& p : extremes) points.push_back(offset + scale * p);
+      for (int i = 0; i < 20000; ++i) {
+        const std::array<Vertex, 3>& f = faces[static_cast<std::size_t>(random.uniform() * static_cast<double>(faces.size())) % faces.size()];
+        double a = random.uniform(), b = random.uniform();
+        if (i % 2 == 0) a = std::floor(1024 * a) / 1024, b = std::floor(1024 * b) / 1024;
+        if (a + b > 1) a = 1 - a, b = 1 - b;
+        points.push_back(offset + scale * f[0] + scale * a * (f[1] - f[0]) + scale * b * (f[2] - f[0]));
+        points.push_back(offset + scale * Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5));
+      }
+      const std::vector<std::size_t> kept = hull_detail::hull_candidates(points);
+      std::vector<Kernel::Point_3> kept_points;
+      for (const std::size_t i : kept) kept_points.emplace_back(points[i].x(), points[i].y(), points[i].z());
+      CGAL::Surface_mesh<Kernel::Point_3> hull;
+      CGAL::convex_hull_3(kept_points.begin(), kept_points.end(), hull);
+      std::vector<std::array<Kernel::Point_3, 3>> planes;
+      for (const auto face : hull.faces()) {
+        std::array<Kernel::Point_3, 3> corners;
+        int k = 0;
+        for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) corners[static_cast<std::size_t>(k++)] = hull.point(v);
+        planes.push_back(corners);
+      }
+      std::size_t dropped = 0, outside = 0;
+      for (std::size_t i = 0, next = 0; i < points.size(); ++i) {
+        if (next < kept.size() && kept[next] == i) {
+          ++next;
+          continue;
+        }
+        ++dropped;
+        const Kernel::Point_3 p(points[i].x(), points[i].y(), points[i].z());
+        for (const auto& c : planes)
+          if (CGAL::orientation(c[0], c[1], c[2], p) != CGAL::NEGATIVE) {  // outward faces: inside is negative
+            ++outside;
+            break;
+          }
+      }
+      const std::string label = "scale " + std::to_string(scale) + " offset " + std::to_string(offset.x());
+      EXPECT_EQ(outside, 0u) << label << ": " << dropped << " dropped";
+      if (scale == 1.0) {
+        EXPECT_GT(dropped, 19000u) << label;  // the cube's inside
+      } else {
+        EXPECT_EQ(dropped, 0u) << label;  // planes that underflow drop nothing
+      }
+    }
+}
+
+// The plane test the candidates are dropped by: "certainly below" must be strictly below
+// by exact orientation, for points within rounding of fat and sliver triangles (any
+// mantissa), about the origin and 10^6 away, at scales from 10^-90 to 10^90 (at 10^+-150
+// the slack's products leave the normal numbers and there is no plane). It must also say
+// so for most points clearly below, or it proves nothing.
+TEST(ConvexHull, CertainPlaneCallsBelowOnlyWhatIsStrictlyBelow) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  Random random(29);
+  std::size_t near_below = 0, clearly_below = 0, clearly = 0, refused = 0, wrong = 0;
+  std::string first_wrong;
+  for (const double scale : {1.0, 1e-90, 1e90})
+    for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(1e6, -2e6, 3e6)})
+      for (int triangle = 0; triangle < 200; ++triangle) {
+        const Vertex a = offset * scale + scale * (Vertex(random.uniform(), random.uniform(), random.uniform()) - Vertex::Constant(0.5));
+        const Vertex b = a + scale * (Vertex(random.uniform(), random.uniform(), random.uniform()) - Vertex::Constant(0.5));
+        Vertex c = a + scale * (Vertex(random.uniform(), random.uniform(), random.uniform()) - Vertex::Constant(0.5));
+        if (triangle % 2 == 1) c = a + 0.3 * (b - a) + 1e-9 * scale * Vertex(random.uniform(), random.uniform(), random.uniform());  // a sliver
+        const std::optional<hull_detail::CertainPlane> plane = hull_detail::CertainPlane::through(a, b, c, 4 * scale);
+        if (!plane) {
+          ++refused;
+          continue;
+        }
+        const Kernel::Point_3 pa(a.x(), a.y(), a.z()), pb(b.x(), b.y(), b.z()), pc(c.x(), c.y(), c.z());
+        const Vertex unit = (plane->normal / plane->normal.cwiseAbs().maxCoeff()).normalized();  // no squares that overflow
+        for (int i = 0; i < 50; ++i) {
+          const double s = 2 * random.uniform() - 0.5, t = 2 * random.uniform() - 0.5;
+          const Vertex on = a + s * (b - a) + t * (c - a);
+          for (const double d : {0.0, -1e-17, -1e-16, -1e-15, -1e-3}) {
+            const Vertex p = on + d * scale * unit;
+            const bool below = plane->certainly_below(p);
+            const CGAL::Orientation exact = CGAL::orientation(pa, pb, pc, Kernel::Point_3(p.x(), p.y(), p.z()));
+            if (below && exact != CGAL::NEGATIVE && wrong++ == 0)
+              first_wrong = "scale " + std::to_string(scale) + " offset " + std::to_string(offset.x()) + " triangle " +
+                            std::to_string(triangle) + " distance " + std::to_string(d);
+            if (d > -1e-3) near_below += below ? 1 : 0;
+            if (d == -1e-3 && triangle % 2 == 0 && offset.x() == 0) ++clearly, clearly_below += below ? 1 : 0;
+          }
+        }
+      }
+  EXPECT_EQ(wrong, 0u) << "first: " << first_wrong;
+  EXPECT_EQ(refused, 0u);
+  for (const double scale : {1e-150, 1e150})
+    EXPECT_FALSE(hull_detail::CertainPlane::through(Vertex::Zero(), scale * Vertex(1, 0, 0), scale * Vertex(0, 1, 0), scale));
+  EXPECT_GT(clearly_below, clearly * 9 / 10);  // the slack is small beside real distances
+  std::printf("points within 1e-15 of the plane called below: %zu; clearly below: %zu of %zu\n", near_below, clearly_below, clearly);
 }
 
 class ConvexHullOfRealMesh : public ::testing::TestWithParam<std::string> {};
