@@ -5,9 +5,9 @@
 
 #include <algorithm>
 #include <array>
-#include <vector>
 #include <numeric>
 #include <string>
+#include <vector>
 
 #include "visproxy/core/errors.h"
 

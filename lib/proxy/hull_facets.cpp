@@ -133,8 +133,11 @@ std::vector<std::size_t> candidates_of(const std::vector<Kernel::Point_3>& point
 
 std::optional<CertainPlane> CertainPlane::through(const Vertex& a, const Vertex& b, const Vertex& c, double reach) {
   const Vertex u = b - a, v = c - a;
-  CertainPlane plane{a, u.cross(v), 1e-12 * u.norm() * v.norm() * reach};
-  if (!std::isnormal(plane.slack) || !plane.normal.allFinite()) return std::nullopt;
+  // |b - a| |c - a| reach bounds every product in the test; below 1e300 their sums cannot
+  // overflow.
+  const double bound = u.norm() * v.norm() * reach;
+  CertainPlane plane{a, u.cross(v), 1e-12 * bound};
+  if (!(bound <= 1e300) || !std::isnormal(plane.slack) || !plane.normal.allFinite()) return std::nullopt;
   return plane;
 }
 

@@ -29,8 +29,9 @@ std::vector<Triangle> exact_convex_hull(const std::vector<Vertex>& points);
 struct CertainPlane {
   Vertex a = Vertex::Zero(), normal = Vertex::Zero();
   double slack = 0;
-  /// No plane when the slack is not a normal number or the normal is not finite
-  /// (coordinates so small or so large that the products underflow or overflow).
+  /// No plane when the slack is not a normal number, |b - a| |c - a| reach is above 1e300
+  /// or the normal is not finite (coordinates so small or so large that the products
+  /// underflow or could overflow).
   static std::optional<CertainPlane> through(const Vertex& a, const Vertex& b, const Vertex& c, double reach);
   bool certainly_below(const Vertex& p) const { return normal.dot(p - a) < -slack; }
 };

@@ -427,7 +427,7 @@ TEST(ConvexHull, CertainPlaneCallsBelowOnlyWhatIsStrictlyBelow) {
       }
   EXPECT_EQ(wrong, 0u) << "first: " << first_wrong;
   EXPECT_EQ(refused, 0u);
-  for (const double scale : {1e-150, 1e150})
+  for (const double scale : {1e-150, 1e150, 1e101})  // at 1e101 the products could reach 1e303
     EXPECT_FALSE(hull_detail::CertainPlane::through(Vertex::Zero(), scale * Vertex(1, 0, 0), scale * Vertex(0, 1, 0), scale));
   EXPECT_GT(clearly_below, clearly * 9 / 10);  // the slack is small beside real distances
   std::printf("points within 1e-15 of the plane called below: %zu; clearly below: %zu of %zu\n", near_below, clearly_below, clearly);
