@@ -204,7 +204,9 @@ TEST(MeshTopology, AgreesWithPlainMapsOnTornMeshes) {
     collapsed.triangles = triangles;
     const MeshTopology want = plain_topology(collapsed);
     expect_same_topology(analyze_topology(collapsed), want, "collapsed " + std::to_string(triangles.size()));
-    if (triangles.size() == 1 && triangles[0][0] != triangles[0][2]) EXPECT_EQ(want.non_manifold_vertices, 1u);
+    if (triangles.size() == 1 && triangles[0][0] != triangles[0][2]) {
+      EXPECT_EQ(want.non_manifold_vertices, 1u);
+    }
   }
   EXPECT_EQ(analyze_topology(sphere).boundary_edges, 0u);
   std::uint64_t state = 777;
