@@ -10,9 +10,9 @@
 // the render time per shadow ray, its ratio to the first scene's, log2(instances)'s ratio
 // beside it (the growth the time per ray must stay under), the peak memory (getrusage of
 // the child), and for occluder disks the clusters of balls their tree gave each ray (the
-// work that follows how far a ray runs before a ball hides it). Every scene is checked: bounds must give exact's image bit for
-// bit (hashes of the pixels). The stochastic modes use the proxy named by --proxy of each
-// row, as `visproxy render --proxy` does.
+// work that follows how far a ray runs before a ball hides it). Every scene is checked:
+// bounds must give exact's image bit for bit (hashes of the pixels). The stochastic modes
+// use the proxy named by --proxy of each row, as `visproxy render --proxy` does.
 
 #include <unistd.h>
 

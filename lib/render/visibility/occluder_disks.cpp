@@ -18,6 +18,12 @@ namespace {
 // |w| in double, rounded to single precision: the same arithmetic in every form of the test.
 float segment_length(const Vertex& w) { return static_cast<float>(std::sqrt(w.x() * w.x() + w.y() * w.y() + w.z() * w.z())); }
 
+// Whether the segment w = (wx, wy, wz) of length z lies in a group's bound's cone (one with
+// cos >= -1), in the single-precision arithmetic every scalar form of the test shares.
+bool in_cone(const DiskGroup& group, float wx, float wy, float wz, float z) {
+  return wx * group.ux + wy * group.uy + wz * group.uz > group.cos * z;
+}
+
 }  // namespace
 
 void OccluderDisks::reset(const Vertex& x, const Vertex& n) {
@@ -111,7 +117,7 @@ void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<Sp
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const SphereCluster& cluster = clusters[c];
     // Every ball of a bound behind the tangent plane is behind it too.
-    if (n_.dot(cluster.bound.center - x_) <= -cluster.bound.radius) {
+    if (behind(cluster.bound)) {
       c += cluster.children;
       continue;
     }
@@ -228,7 +234,7 @@ bool OccluderDisks::occludes_groups(const Vertex& end, std::size_t first, std::s
     const DiskGroup& group = groups_[g];
     if (group.cos >= -1) {
       ++tests;
-      if (!(dx * group.ux + dy * group.uy + dz * group.uz > group.cos * zf)) {
+      if (!in_cone(group, dx, dy, dz, zf)) {
         g += group.span;
         continue;
       }
@@ -574,7 +580,7 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t
         const DiskGroup& cone = cone_[r];
         if (cone.cos >= -1) {
           ++tests;
-          if (!(dx * cone.ux + dy * cone.uy + dz * cone.uz > cone.cos * zf)) return false;
+          if (!in_cone(cone, dx, dy, dz, zf)) return false;
         }
         if (group_[r] == kNotMade) {
           const std::vector<Sphere>& balls = world.occluder_spheres(run.instance);
