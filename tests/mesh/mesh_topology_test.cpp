@@ -12,6 +12,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/subdivide.h"
 #include "test_meshes.h"
 
 namespace visproxy {
@@ -74,20 +75,7 @@ TEST(EdgeBalance, ClosedMeshesAreBalancedOpenOrFlippedOnesAreNot) {
 // The grouped count against a plain count of every directed edge, on meshes torn at random
 // (triangles dropped, flipped, repeated), and with an index beyond the vertices.
 TEST(EdgeBalance, AgreesWithAPlainCountOnTornMeshes) {
-  TriangleMesh sphere = testing::unit_cube();
-  for (int level = 0; level < 3; ++level) {  // 768 triangles, by splitting each into 4
-    TriangleMesh finer;
-    finer.positions = sphere.positions;
-    for (const Triangle& t : sphere.triangles) {
-      VertexIndex m[3];
-      for (int k = 0; k < 3; ++k) {
-        m[k] = static_cast<VertexIndex>(finer.positions.size());
-        finer.positions.push_back((sphere.positions[t[k]] + sphere.positions[t[(k + 1) % 3]]) / 2);
-      }
-      finer.triangles.insert(finer.triangles.end(), {{t[0], m[0], m[2]}, {m[0], t[1], m[1]}, {m[2], m[1], t[2]}, {m[0], m[1], m[2]}});
-    }
-    sphere = weld_vertices(finer);
-  }
+  const TriangleMesh sphere = subdivide_midpoint(testing::unit_cube(), 3);  // 768 triangles, closed
   std::uint64_t state = 12345;
   auto next = [&](std::uint64_t n) { state = state * 6364136223846793005ull + 1442695040888963407ull; return (state >> 33) % n; };
   for (int round = 0; round < 30; ++round) {
@@ -181,20 +169,7 @@ void expect_same_topology(const MeshTopology& got, const MeshTopology& want, con
 // Torn, flipped, duplicated, pinched (two vertices made one: bow ties and non-manifold
 // edges) and collapsed (a repeated index) triangles on a closed 768-triangle sphere.
 TEST(MeshTopology, AgreesWithPlainMapsOnTornMeshes) {
-  TriangleMesh sphere = testing::unit_cube();
-  for (int level = 0; level < 3; ++level) {
-    TriangleMesh finer;
-    finer.positions = sphere.positions;
-    for (const Triangle& t : sphere.triangles) {
-      VertexIndex m[3];
-      for (int k = 0; k < 3; ++k) {
-        m[k] = static_cast<VertexIndex>(finer.positions.size());
-        finer.positions.push_back((sphere.positions[t[k]] + sphere.positions[t[(k + 1) % 3]]) / 2);
-      }
-      finer.triangles.insert(finer.triangles.end(), {{t[0], m[0], m[2]}, {m[0], t[1], m[1]}, {m[2], m[1], t[2]}, {m[0], m[1], m[2]}});
-    }
-    sphere = weld_vertices(finer);
-  }
+  const TriangleMesh sphere = subdivide_midpoint(testing::unit_cube(), 3);  // 768 triangles, closed
   expect_same_topology(analyze_topology(sphere), plain_topology(sphere), "sphere");
   // Collapsed triangles alone: an edge used twice by one triangle joins no fans, so the
   // triangle's two corners at a vertex stay two fans.

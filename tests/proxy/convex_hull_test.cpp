@@ -227,6 +227,53 @@ TEST(ConvexHull, ManyPointsGiveTheHullOfAll) {
   EXPECT_TRUE(contains_every_vertex(round.mesh, fan_over(ball)));
 }
 
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+// The extremes along hull_candidates()'s 26 directions: a cube's corners, its face centres
+// pushed out to 1.25 and its edges' middles to 1.125 (dyadic, so that points on the faces
+// of their hull can be exact).
+std::vector<Vertex> cube_extremes() {
+  std::vector<Vertex> extremes;
+  for (int x = -1; x <= 1; ++x)
+    for (int y = -1; y <= 1; ++y)
+      for (int z = -1; z <= 1; ++z) {
+        const int nonzero = (x != 0) + (y != 0) + (z != 0);
+        if (nonzero > 0) extremes.push_back((nonzero == 1 ? 1.25 : nonzero == 2 ? 1.125 : 1.0) * Vertex(x, y, z));
+      }
+  return extremes;
+}
+
+// The outward triangles of CGAL's convex hull of `points`.
+std::vector<std::array<Kernel::Point_3, 3>> hull_faces(const std::vector<Kernel::Point_3>& points) {
+  CGAL::Surface_mesh<Kernel::Point_3> hull;
+  CGAL::convex_hull_3(points.begin(), points.end(), hull);
+  std::vector<std::array<Kernel::Point_3, 3>> faces;
+  for (const auto face : hull.faces()) {
+    std::array<Kernel::Point_3, 3> corners;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) corners[static_cast<std::size_t>(k++)] = hull.point(v);
+    faces.push_back(corners);
+  }
+  return faces;
+}
+
+std::vector<Kernel::Point_3> cgal_points(const std::vector<Vertex>& points) {
+  std::vector<Kernel::Point_3> out;
+  for (const Vertex& p : points) out.emplace_back(p.x(), p.y(), p.z());
+  return out;
+}
+
+// hull_faces() of `points`, with Vertex corners.
+std::vector<std::array<Vertex, 3>> hull_faces(const std::vector<Vertex>& points) {
+  std::vector<std::array<Vertex, 3>> faces;
+  for (const auto& f : hull_faces(cgal_points(points))) {
+    std::array<Vertex, 3> corners;
+    for (std::size_t k = 0; k < 3; ++k) corners[k] = Vertex(f[k].x(), f[k].y(), f[k].z());
+    faces.push_back(corners);
+  }
+  return faces;
+}
+
 // Over 200 000 points, the points certainly inside the hull of those extreme along 26
 // directions are dropped first. Thousands of points lie on that inner hull's faces and
 // near them on both sides, about the origin and 10^6 away (where rounding moves them by
@@ -234,30 +281,8 @@ TEST(ConvexHull, ManyPointsGiveTheHullOfAll) {
 // outside are corners of the whole, or within 1e-13 to 1e-9. The corners must still be
 // CGAL's, for every point.
 TEST(ConvexHull, PointsAtTheInnerHullsFacesKeepTheCornersOfAll) {
-  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-  // The extremes: a cube's corners, its face centres pushed out and its edges' middles
-  // pushed out.
-  std::vector<Vertex> extremes;
-  for (int x = -1; x <= 1; ++x)
-    for (int y = -1; y <= 1; ++y)
-      for (int z = -1; z <= 1; ++z) {
-        const int nonzero = (x != 0) + (y != 0) + (z != 0);
-        if (nonzero == 0) continue;
-        const double push = nonzero == 1 ? 1.25 : nonzero == 2 ? 1.125 : 1.0;  // dyadic: points on faces are exact
-        extremes.push_back(push * Vertex(x, y, z));
-      }
-  std::vector<Kernel::Point_3> inner_points;
-  for (const Vertex& p : extremes) inner_points.emplace_back(p.x(), p.y(), p.z());
-  CGAL::Surface_mesh<Kernel::Point_3> inner;
-  CGAL::convex_hull_3(inner_points.begin(), inner_points.end(), inner);
-  std::vector<std::array<Vertex, 3>> faces;
-  for (const auto face : inner.faces()) {
-    std::array<Vertex, 3> corners;
-    int k = 0;
-    for (const auto v : CGAL::vertices_around_face(inner.halfedge(face), inner))
-      corners[static_cast<std::size_t>(k++)] = Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
-    faces.push_back(corners);
-  }
+  const std::vector<Vertex> extremes = cube_extremes();
+  const std::vector<std::array<Vertex, 3>> faces = hull_faces(extremes);
   ASSERT_GE(faces.size(), 24u);
   for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(1e6, -2e6, 3e6)})
   for (const std::vector<double>& distances : {std::vector<double>{0.0}, std::vector<double>{-1e-9, -1e-13, 0.0, 1e-13, 1e-9}}) {
@@ -293,8 +318,7 @@ TEST(ConvexHull, PointsAtTheInnerHullsFacesKeepTheCornersOfAll) {
       }
     }
     const ConvexHullResult hull = build_convex_hull(fan_over(points));
-    std::vector<Kernel::Point_3> all;
-    for (const Vertex& p : points) all.emplace_back(p.x(), p.y(), p.z());
+    const std::vector<Kernel::Point_3> all = cgal_points(points);
     std::vector<Kernel::Point_3> extreme;
     CGAL::extreme_points_3(all, std::back_inserter(extreme));
     std::vector<std::array<double, 3>> expected, got;
@@ -316,26 +340,8 @@ TEST(ConvexHull, PointsAtTheInnerHullsFacesKeepTheCornersOfAll) {
 // outside the hull of the others. Coordinates of 10^-110 and 10^-300, where the planes'
 // products underflow, must drop nothing.
 TEST(ConvexHull, CandidatesDropOnlyPointsStrictlyInside) {
-  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-  std::vector<Vertex> extremes;
-  for (int x = -1; x <= 1; ++x)
-    for (int y = -1; y <= 1; ++y)
-      for (int z = -1; z <= 1; ++z) {
-        const int nonzero = (x != 0) + (y != 0) + (z != 0);
-        if (nonzero > 0) extremes.push_back((nonzero == 1 ? 1.25 : nonzero == 2 ? 1.125 : 1.0) * Vertex(x, y, z));
-      }
-  std::vector<Kernel::Point_3> inner_points;
-  for (const Vertex& p : extremes) inner_points.emplace_back(p.x(), p.y(), p.z());
-  CGAL::Surface_mesh<Kernel::Point_3> inner;
-  CGAL::convex_hull_3(inner_points.begin(), inner_points.end(), inner);
-  std::vector<std::array<Vertex, 3>> faces;
-  for (const auto face : inner.faces()) {
-    std::array<Vertex, 3> corners;
-    int k = 0;
-    for (const auto v : CGAL::vertices_around_face(inner.halfedge(face), inner))
-      corners[static_cast<std::size_t>(k++)] = Vertex(inner.point(v).x(), inner.point(v).y(), inner.point(v).z());
-    faces.push_back(corners);
-  }
+  const std::vector<Vertex> extremes = cube_extremes();
+  const std::vector<std::array<Vertex, 3>> faces = hull_faces(extremes);
   for (const double scale : {1.0, 1e-110, 1e-300})
     for (const Vertex& offset : {Vertex(0, 0, 0), Vertex(1e6, -2e6, 3e6)}) {
       if (scale != 1.0 && offset.x() != 0) continue;
@@ -351,17 +357,9 @@ TEST(ConvexHull, CandidatesDropOnlyPointsStrictlyInside) {
         points.push_back(offset + scale * Vertex(random.uniform() - 0.5, random.uniform() - 0.5, random.uniform() - 0.5));
       }
       const std::vector<std::size_t> kept = hull_detail::hull_candidates(points);
-      std::vector<Kernel::Point_3> kept_points;
-      for (const std::size_t i : kept) kept_points.emplace_back(points[i].x(), points[i].y(), points[i].z());
-      CGAL::Surface_mesh<Kernel::Point_3> hull;
-      CGAL::convex_hull_3(kept_points.begin(), kept_points.end(), hull);
-      std::vector<std::array<Kernel::Point_3, 3>> planes;
-      for (const auto face : hull.faces()) {
-        std::array<Kernel::Point_3, 3> corners;
-        int k = 0;
-        for (const auto v : CGAL::vertices_around_face(hull.halfedge(face), hull)) corners[static_cast<std::size_t>(k++)] = hull.point(v);
-        planes.push_back(corners);
-      }
+      std::vector<Vertex> kept_points;
+      for (const std::size_t i : kept) kept_points.push_back(points[i]);
+      const std::vector<std::array<Kernel::Point_3, 3>> planes = hull_faces(cgal_points(kept_points));
       std::size_t dropped = 0, outside = 0;
       for (std::size_t i = 0, next = 0; i < points.size(); ++i) {
         if (next < kept.size() && kept[next] == i) {
@@ -392,7 +390,6 @@ TEST(ConvexHull, CandidatesDropOnlyPointsStrictlyInside) {
 // the slack's products leave the normal numbers and there is no plane). It must also say
 // so for most points clearly below, or it proves nothing.
 TEST(ConvexHull, CertainPlaneCallsBelowOnlyWhatIsStrictlyBelow) {
-  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
   Random random(29);
   std::size_t near_below = 0, clearly_below = 0, clearly = 0, refused = 0, wrong = 0;
   std::string first_wrong;
