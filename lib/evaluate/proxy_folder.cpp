@@ -1,5 +1,7 @@
 #include "visproxy/evaluate/proxy_folder.h"
 
+#include <optional>
+
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
 #include "visproxy/core/json_input.h"
@@ -98,7 +100,10 @@ ProxyKind entry_kind(const json& entry) {
   throw Error("manifest entry " + entry.value("name", std::string("?")) + ": unknown kind \"" + kind + "\"");
 }
 
-ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const json& entry) {
+namespace {
+
+// The geometry of the entry's `file` alone.
+ProxyGeometry read_proxy_file(const std::filesystem::path& folder, const json& entry) {
   const std::filesystem::path path = folder / entry.at("file").get<std::string>();
   const std::string type = entry.at("primitive_type").get<std::string>();
   const auto primitives = entry.at("primitives").get<std::size_t>();
@@ -118,6 +123,58 @@ ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const jso
     throw InvalidInputError(path, "holds " + std::to_string(geometry.mesh.triangles.size()) +
                                       " triangles; the manifest lists " + std::to_string(expected));
   if (geometry.mesh.triangles.empty()) throw InvalidInputError(path, "holds no triangles");
+  return geometry;
+}
+
+// Where `copy` (read from `path`) first differs from `geometry`'s triangles, or empty.
+std::string mesh_difference(const std::filesystem::path& path, const TriangleMesh& copy, const TriangleMesh& geometry,
+                            const std::filesystem::path& original) {
+  const std::string prefix = path.filename().string() + " does not hold the proxy of " + original.filename().string() + ": ";
+  if (copy.positions.size() != geometry.positions.size() || copy.triangles.size() != geometry.triangles.size())
+    return prefix + std::to_string(copy.positions.size()) + " vertices and " + std::to_string(copy.triangles.size()) +
+           " triangles, not " + std::to_string(geometry.positions.size()) + " and " + std::to_string(geometry.triangles.size());
+  for (std::size_t v = 0; v < copy.positions.size(); ++v)
+    if (copy.positions[v] != geometry.positions[v]) return prefix + "vertex " + std::to_string(v) + " differs";
+  for (std::size_t t = 0; t < copy.triangles.size(); ++t)
+    if (copy.triangles[t] != geometry.triangles[t]) return prefix + "triangle " + std::to_string(t) + " differs";
+  return {};
+}
+
+// The first file of entry.files (other than `file`) that does not hold the geometry.
+std::string files_problem(const std::filesystem::path& folder, const json& entry, const ProxyGeometry& geometry) {
+  const json* files = entry.contains("files") ? &entry.at("files") : nullptr;
+  if (files == nullptr || !files->is_array()) return {};
+  const std::filesystem::path original = folder / entry.at("file").get<std::string>();
+  std::optional<TriangleMesh> drawn;  // a sphere set as sphere_set_mesh draws it
+  for (const json& name : *files) {
+    if (!name.is_string()) throw InvalidInputError(folder / "manifest.json", "an entry's files must be file names");
+    const std::filesystem::path relative(name.get<std::string>());
+    if (relative.empty() || relative.is_absolute() || relative.has_parent_path())
+      throw InvalidInputError(folder / "manifest.json", "\"" + relative.string() + "\" is not a file name in the proxy folder");
+    const std::filesystem::path path = folder / relative;
+    if (path == original) continue;
+    if (!std::filesystem::exists(path)) return relative.string() + " is listed but missing";
+    TriangleMesh copy;
+    try {
+      copy = read_mesh(path, {.weld = Weld::never, .on_warning = {}});
+    } catch (const Error& error) {
+      return relative.string() + " cannot be read: " + error.what();
+    }
+    if (geometry.type == PrimitiveType::sphere) {
+      if (!drawn) drawn = sphere_set_mesh(geometry.spheres);
+      if (std::string problem = mesh_difference(path, copy, *drawn, original); !problem.empty()) return problem;
+    } else if (std::string problem = mesh_difference(path, copy, geometry.mesh, original); !problem.empty()) {
+      return problem;
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const json& entry) {
+  ProxyGeometry geometry = read_proxy_file(folder, entry);
+  geometry.files_problem = files_problem(folder, entry, geometry);
   return geometry;
 }
 

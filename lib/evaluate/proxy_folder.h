@@ -40,11 +40,17 @@ struct ProxyGeometry {
   PrimitiveType type = PrimitiveType::triangle;
   TriangleMesh mesh;            ///< unless spheres
   std::vector<Sphere> spheres;  ///< sphere proxies
+  /// Empty, or one line naming a file of the entry's `files` that does not hold this very
+  /// geometry (a copy edited by hand): no claim about the folder's files holds then.
+  std::string files_problem;
 };
 
-/// Reads the file a manifest entry names (`file`, relative to `folder`). Throws
-/// InvalidInputError naming the file when it is missing, unreadable, or does not hold
-/// what the entry says (primitive type, primitive count).
+/// Reads the file a manifest entry names (`file`, relative to `folder`), and every other
+/// file its `files` lists, each of which must hold the same geometry bit for bit (NAME.obj
+/// the triangles of NAME.ply; a sphere set's NAME.ply its spheres as sphere_set_mesh draws
+/// them): where one does not, files_problem says so. Throws InvalidInputError naming the
+/// file when `file` is missing, unreadable, or does not hold what the entry says
+/// (primitive type, primitive count), and when `files` names a path outside the folder.
 ProxyGeometry read_proxy_geometry(const std::filesystem::path& folder, const nlohmann::json& entry);
 
 /// The entry's kind ("outside", "inside", "general").

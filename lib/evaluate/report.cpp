@@ -242,7 +242,7 @@ ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::pa
   std::map<std::string, InstanceProxy> proxies;
   for (const json& entry : manifest.at("proxies")) {
     const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
-    const bool proved = entry.contains("verify") && verdict_proves(entry["verify"], mesh, geometry);
+    const bool proved = entry.contains("verify") && verdict_proves(entry["verify"], entry, mesh, geometry);
     proxies[entry.at("name").get<std::string>()] =
         InstanceProxy{entry_kind(entry), entry.value("spec", std::string()), geometry.mesh, geometry.spheres, proved};
   }

@@ -23,11 +23,11 @@ InstanceProxy prove(const SceneMesh& mesh, const std::filesystem::path& folder, 
   const ProxyKind kind = entry_kind(entry);
   bool proved = false;
   if (kind != ProxyKind::general) {
-    if (entry.contains("verify") && verdict_proves(entry["verify"], mesh.mesh, geometry)) {
+    if (entry.contains("verify") && verdict_proves(entry["verify"], entry, mesh.mesh, geometry)) {
       proved = true;
     } else {
       nlohmann::json verdict = verify_proxy(mesh.mesh, manifest, entry, geometry);
-      proved = verdict_proves(verdict, mesh.mesh, geometry);
+      proved = verdict_proves(verdict, entry, mesh.mesh, geometry);
       if (options.on_verify) {
         const nlohmann::json& counterexample = verdict["counterexample"];
         options.on_verify(mesh.name, spec.text, proved, counterexample.is_string() ? counterexample.get<std::string>() : "");

@@ -113,15 +113,15 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
       if (proxy.type == PrimitiveType::sphere) {
         result = {{"holds", false}, {"margin", nullptr}, {"checked", json::object()},
                   {"counterexample", "an outside claim is proved for triangle proxies only, and this proxy is a sphere set"}};
-        result["claim"] = "contains the mesh";
+        result["claim"] = kind_claim(kind);
         break;
       }
       result = check_mesh_containment(proxy.mesh, mesh, false, "mesh", "proxy");
-      result["claim"] = "contains the mesh";
+      result["claim"] = kind_claim(kind);
       break;
     }
     case ProxyKind::inside: {
-      result["claim"] = "lies within the mesh";
+      result["claim"] = kind_claim(kind);
       if (const std::string problem = closed_mesh_problem(mesh); !problem.empty()) {
         result["holds"] = false;
         result["margin"] = nullptr;
@@ -144,7 +144,7 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
           proxy.type == PrimitiveType::sphere ? sphere_union_boundary_mesh(proxy.spheres, 2) : proxy.mesh, mesh,
           {.samples_per_mesh = options.hausdorff_samples, .seed = options.seed});
       const double diagonal = manifest.at("mesh").at("bbox").at("diagonal").get<double>();
-      result = {{"claim", "none"},
+      result = {{"claim", kind_claim(kind)},
                 {"holds", true},
                 {"margin", nullptr},
                 {"counterexample", nullptr},
@@ -155,6 +155,15 @@ json verify_proxy(const TriangleMesh& mesh, const json& manifest, const json& en
       break;
     }
   }
+  // The folder ships every file of the entry: one that does not hold the geometry proved
+  // above breaks the claim (named after the geometry's own counterexample, if any).
+  if (!proxy.files_problem.empty()) {
+    result["holds"] = false;
+    if (!result["counterexample"].is_string()) result["counterexample"] = "the folder's files disagree: " + proxy.files_problem;
+  }
+  result["kind"] = kind_name(kind);
+  result["file"] = entry.value("file", std::string());
+  result["files"] = entry.contains("files") ? entry.at("files") : json::array();
   result["mesh_hash"] = content_hash(mesh);
   result["proxy_hash"] = proxy_content_hash(proxy);
   result["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -171,9 +180,22 @@ std::string proxy_content_hash(const ProxyGeometry& proxy) {
   return content_hash(proxy.mesh, bytes);
 }
 
-bool verdict_proves(const json& verify, const TriangleMesh& mesh, const ProxyGeometry& proxy) {
-  return verify.is_object() && verify.value("holds", false) && verify.value("claim", std::string("none")) != "none" &&
-         verify.value("mesh_hash", std::string()) == content_hash(mesh) &&
+std::string_view kind_claim(ProxyKind kind) {
+  switch (kind) {
+    case ProxyKind::outside: return "contains the mesh";
+    case ProxyKind::inside: return "lies within the mesh";
+    case ProxyKind::general: break;
+  }
+  return "none";
+}
+
+bool verdict_proves(const json& verify, const json& entry, const TriangleMesh& mesh, const ProxyGeometry& proxy) {
+  const ProxyKind kind = entry_kind(entry);
+  if (kind == ProxyKind::general || !proxy.files_problem.empty() || !verify.is_object()) return false;
+  const json files = entry.contains("files") ? entry.at("files") : json::array();
+  return verify.value("holds", false) == true && verify.value("claim", std::string()) == kind_claim(kind) &&
+         verify.value("kind", std::string()) == kind_name(kind) && verify.value("file", std::string()) == entry.value("file", std::string("")) &&
+         verify.contains("files") && verify.at("files") == files && verify.value("mesh_hash", std::string()) == content_hash(mesh) &&
          verify.value("proxy_hash", std::string()) == proxy_content_hash(proxy);
 }
 

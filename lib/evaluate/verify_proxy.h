@@ -32,17 +32,28 @@ struct VerifyOptions {
 /// the container's surface in world units (null for general proxies), and
 /// `counterexample` is null or one line naming the first vertex, triangle or sphere that
 /// breaks the claim.
-/// The object also records `mesh_hash` and `proxy_hash` (content_hash of the mesh and
-/// proxy_content_hash of the proxy), the files the verdict was made on.
+/// The object also records what the verdict is about: the entry's `kind`, its `file` and
+/// `files`, and `mesh_hash` and `proxy_hash` (content_hash of the mesh and
+/// proxy_content_hash of the proxy). A proxy whose other files do not hold its geometry
+/// (ProxyGeometry::files_problem) does not hold, whatever its kind: the folder ships them.
 nlohmann::json verify_proxy(const TriangleMesh& mesh, const nlohmann::json& manifest, const nlohmann::json& entry,
                             const ProxyGeometry& proxy, const VerifyOptions& options = {});
 
 /// content_hash of a proxy's geometry: its triangles, and its spheres' bytes mixed in.
 std::string proxy_content_hash(const ProxyGeometry& proxy);
 
-/// Whether a recorded `verify` object (verify_proxy's) is a proof of the entry's claim for
-/// these very files: it holds, and its mesh and proxy hashes are those of `mesh` and `proxy`.
-/// False for a verdict made on other files (a proxy edited by hand since) or none.
-bool verdict_proves(const nlohmann::json& verify, const TriangleMesh& mesh, const ProxyGeometry& proxy);
+/// The claim a kind makes, as verify_proxy records it: "contains the mesh", "lies within
+/// the mesh", "none".
+std::string_view kind_claim(ProxyKind kind);
+
+/// Whether a recorded `verify` object (verify_proxy's) is a proof of the entry's claim, as
+/// the entry states it now, for these very files: it holds; it was made for the entry's
+/// kind (its claim is that kind's), file and files; its mesh and proxy hashes are those of
+/// `mesh` and `proxy`; and the proxy's other files hold its geometry. False for a general
+/// entry, a verdict for another kind (a manifest whose kinds were swapped by hand), for
+/// other files (a proxy edited or swapped since, a verdict copied from another proxy) or
+/// none.
+bool verdict_proves(const nlohmann::json& verify, const nlohmann::json& entry, const TriangleMesh& mesh,
+                    const ProxyGeometry& proxy);
 
 }  // namespace visproxy

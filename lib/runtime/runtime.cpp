@@ -62,7 +62,7 @@ RuntimeProxy RuntimeProxy::load(const std::filesystem::path& folder, std::string
   const ProxyKind claimed = entry_kind(*entry);
   proxy.kind_ = claimed;
   if (claimed != ProxyKind::general) {
-    bool proved = entry->contains("verify") && verdict_proves(entry->at("verify"), proxy.source_, geometry);
+    bool proved = entry->contains("verify") && verdict_proves(entry->at("verify"), *entry, proxy.source_, geometry);
     std::string why = "no verdict of 'visproxy verify' for these files";
     if (!proved && options.verify_now) {
       const json verdict = verify_proxy(proxy.source_, manifest, *entry, geometry);
