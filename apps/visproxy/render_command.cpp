@@ -101,9 +101,9 @@ void add_render_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1 << 22));
   command->add_option("--error", o->error,
                       "lightcuts: refine the cut until every cluster's error bound is at most this fraction of the cut's total "
-                      "(0: every light its own cluster, up to --max-cut) [default: 0.02]")
+                      "(0: the exact sum over every light, whatever --max-cut says) [default: 0.02]")
       ->check(CLI::Range(0.0, 1.0));
-  command->add_option("--max-cut", o->max_cut, "lightcuts: most clusters in a cut [default: 1000]")->check(CLI::Range(1, 1 << 24));
+  command->add_option("--max-cut", o->max_cut, "lightcuts: most clusters in a cut with --error above 0; the stats count the cuts it stopped [default: 1000]")->check(CLI::Range(1, 1 << 24));
   const std::map<std::string, VisibilityBounds> bounds{{"none", VisibilityBounds::none},
                                                        {"lower", VisibilityBounds::lower},
                                                        {"upper", VisibilityBounds::upper},

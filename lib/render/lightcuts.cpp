@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 
+#include "visproxy/core/errors.h"
 #include "visproxy/render/image.h"
 #include "visproxy/render/sampling.h"
 
@@ -257,6 +259,10 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
   }
   const double brdf_luminance = luminance(brdf);
   Color total = Color::Zero();
+  // At error 0 the cut is the exact sum: every cluster that may contribute is refined to its
+  // lights (even one whose bounds meet, which a cluster's single estimate would round
+  // differently), and no limit on the cut's size applies.
+  const bool exact_sum = options.error == 0;
 
   auto trace = [&](std::uint32_t light) -> signed char {
     ++result.shadow_rays;
@@ -304,21 +310,30 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
     if (entry.visibility > 0) entry.estimate = brdf.cwiseProduct(node.intensity) * rep_g;
     // (A black cluster has no error, even where its geometric bound is infinite.)
     if (node.lights > 1 && !occluded && luminance(node.intensity) > 0 && brdf_luminance > 0)
-      entry.error = brdf_luminance * luminance(node.intensity) * (g.upper - (unoccluded ? g.lower : 0.0));
+      entry.error = exact_sum ? std::numeric_limits<double>::infinity()  // refined to its lights, whatever its bounds
+                              : brdf_luminance * luminance(node.intensity) * (g.upper - (unoccluded ? g.lower : 0.0));
     return entry;
   };
   auto by_error = [](const Entry& a, const Entry& b) { return a.error < b.error; };
   heap_.clear();
   heap_.push_back(make(LightTree::root, ~0u, -1, false, 0));
   total = heap_.back().estimate;
-  while (!heap_.empty() && static_cast<int>(heap_.size()) < options.max_cut) {
+  while (!heap_.empty()) {
     const Entry& top = heap_.front();
-    if (!(top.error > options.error * luminance(total))) break;
+    // Only clusters refine: a leaf (one light) has error 0, and so has every entry when the
+    // largest error is 0. The running total may dip below 0 by rounding (its terms cancel);
+    // the threshold is taken of its positive part.
+    if (!(top.error > 0) || !(top.error > options.error * std::max(0.0, luminance(total)))) break;
+    if (!exact_sum && static_cast<int>(heap_.size()) >= options.max_cut) {
+      result.stopped_at_max_cut = true;
+      break;
+    }
     std::pop_heap(heap_.begin(), heap_.end(), by_error);
     const Entry parent = heap_.back();
     heap_.pop_back();
     total -= parent.estimate;
     const LightTree::Node& node = nodes[parent.node];
+    if (node.left < 0 || node.right < 0) throw Error("lightcuts: a leaf of the light tree carried an error bound");
     const std::uint32_t rep = node.representative;
     for (const std::int32_t child : {node.left, node.right}) {
       const Entry entry = make(static_cast<std::uint32_t>(child), rep, parent.visibility, parent.proved_unoccluded, parent.lower_failures);
@@ -327,7 +342,11 @@ CutResult CutEvaluator::evaluate(const Vertex& x, const SurfaceHit& hit, double 
       std::push_heap(heap_.begin(), heap_.end(), by_error);
     }
   }
-  // The sum again, in the heap's order, rather than the running total's cancellations.
+  // The sum again, in the order of the clusters' nodes rather than the heap's (which
+  // depends on the error bounds, and so on the proofs) or the running total's
+  // cancellations: two cuts of the same clusters give the same bits, and proved-occluded
+  // clusters add exact zeros.
+  std::sort(heap_.begin(), heap_.end(), [](const Entry& a, const Entry& b) { return a.node < b.node; });
   for (const Entry& entry : heap_) result.radiance += entry.estimate;
   result.size = static_cast<int>(heap_.size());
   return result;

@@ -92,7 +92,11 @@ double light_geometry(const PointLight& light, const Vertex& x, const Vertex& n)
 enum class VisibilityBounds { none, lower, upper, both };
 
 struct CutOptions {
-  double error = 0.02;   ///< each cluster's error bound at most this fraction of the cut's total (luminance)
+  /// Each cluster's error bound at most this fraction of the cut's total (luminance). 0:
+  /// the exact sum over every light (each cluster refined until it is one light or
+  /// contributes nothing for certain), whatever max_cut says.
+  double error = 0.02;
+  /// Most clusters in a cut (error > 0); a cut stopped by it says so (CutResult::stopped_at_max_cut).
   int max_cut = 1000;
   VisibilityBounds bounds = VisibilityBounds::none;
   /// Trace the representative of every proved cluster too and count where the traced
@@ -107,6 +111,7 @@ struct CutResult {
   int proved_unoccluded = 0, proved_occluded = 0;  ///< clusters proved (each time one entered the cut)
   int proofs_tried = 0;
   int disagreements = 0;  ///< check_proofs: proved clusters whose traced representative disagreed
+  bool stopped_at_max_cut = false;  ///< refinement stopped by CutOptions::max_cut before the error bound was met
 };
 
 /// One thread's cut evaluator. `blocked(light, end)` traces the segment from the shading

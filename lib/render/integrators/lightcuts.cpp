@@ -26,6 +26,7 @@ int histogram_bin(int size) { return std::min(kHistogramBins - 1, static_cast<in
 
 struct CutCounts {
   std::uint64_t cuts = 0, clusters = 0, rays = 0, proved_unoccluded = 0, proved_occluded = 0, proofs_tried = 0, disagreements = 0;
+  std::uint64_t stopped_at_max_cut = 0;  // cuts whose refinement max_cut stopped
   std::array<std::uint64_t, kHistogramBins> histogram{};
   int largest = 0;
 };
@@ -85,6 +86,7 @@ class LightcutsIntegrator final : public Integrator {
     counts.proved_occluded += static_cast<std::uint64_t>(cut.proved_occluded);
     counts.proofs_tried += static_cast<std::uint64_t>(cut.proofs_tried);
     counts.disagreements += static_cast<std::uint64_t>(cut.disagreements);
+    counts.stopped_at_max_cut += cut.stopped_at_max_cut ? 1 : 0;
     ++counts.histogram[static_cast<std::size_t>(histogram_bin(cut.size))];
     counts.largest = std::max(counts.largest, cut.size);
     cut_sum_[point.pixel] += cut.size;
@@ -101,6 +103,7 @@ class LightcutsIntegrator final : public Integrator {
     for (const CutCounts& c : counts_) {
       all.cuts += c.cuts, all.clusters += c.clusters, all.rays += c.rays, all.proved_unoccluded += c.proved_unoccluded;
       all.proved_occluded += c.proved_occluded, all.proofs_tried += c.proofs_tried, all.disagreements += c.disagreements;
+      all.stopped_at_max_cut += c.stopped_at_max_cut;
       for (int b = 0; b < kHistogramBins; ++b) all.histogram[static_cast<std::size_t>(b)] += c.histogram[static_cast<std::size_t>(b)];
       all.largest = std::max(all.largest, c.largest);
     }
@@ -118,7 +121,8 @@ class LightcutsIntegrator final : public Integrator {
             {"light_tree_nodes", tree_.nodes().size()},
             {"light_seed", context_.options.seed},
             {"error", cut.error},
-            {"max_cut", cut.max_cut},
+            {"max_cut", cut.error == 0 ? nlohmann::json(nullptr) : nlohmann::json(cut.max_cut)},
+            {"cuts_stopped_at_max_cut", all.stopped_at_max_cut},
             {"visibility_bounds", visibility_bounds_name(cut.bounds)},
             {"cuts", all.cuts},
             {"cut_size_mean", static_cast<double>(all.clusters) / cuts},
