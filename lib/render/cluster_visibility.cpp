@@ -306,10 +306,11 @@ void ClusterProofs::Point::prepare_upper() {
 bool ClusterProofs::Point::instance_clear(std::size_t i, const Shaft& shaft, bool on_lights) const {
   const InstanceSolids& solids = proofs_->world_->instance_solids(i);
   if (static_cast<int>(i) == hit_->instance) {
-    // The own mesh behind the tangent plane, the box in front of it.
+    // The own mesh behind the hit triangle's exact plane, the point and the box in front of
+    // it (every segment of the shaft then is).
     if (hit_->own_mesh_behind) {
       bool front = true;
-      for (std::size_t k = 1; k < 9 && front; ++k) front = hit_->normal.dot(shaft.points()[k] - hit_->position) > solids.pad;
+      for (std::size_t k = 1; k < 9 && front; ++k) front = hit_->own_mesh_clear_of(shaft.apex(), shaft.points()[k]);
       if (front) return true;
     }
     return proofs_->mesh_trees_[i].shaft_misses(shaft, solids.pad, apex_margin_);

@@ -36,6 +36,7 @@ constexpr double kSurfaceOffset = kFloatRoundingBound;
 // the normal of its winding), and whether every vertex lies in front of it.
 struct TangentSides {
   std::vector<std::uint8_t> behind, in_front;
+  double tolerance = 0;  // object units: how far a vertex may lie on the wrong side
 };
 
 TangentSides tangent_sides(const TriangleMesh& mesh) {
@@ -43,6 +44,7 @@ TangentSides tangent_sides(const TriangleMesh& mesh) {
   if (mesh.triangles.size() > 4096) return sides;
   const std::vector<Vertex> points = used_positions(mesh);
   const double tolerance = 1e-9 * bounding_box(mesh).diagonal();
+  sides.tolerance = tolerance;
   for (const Triangle& t : mesh.triangles) {
     const Vertex& p0 = mesh.positions[t[0]];
     const Vertex n = (mesh.positions[t[1]] - p0).cross(mesh.positions[t[2]] - p0);
@@ -132,6 +134,7 @@ struct RenderWorld::Impl {
   std::vector<std::vector<Sphere>> sphere_storage;  // moved vectors keep their buffers
   RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
   std::vector<Eigen::Matrix3d> normal_matrices;  // per instance, object to world normals
+  std::vector<Eigen::Affine3d> instance_transforms;  // per instance, object to world points
   std::vector<int> light_of_triangle;
   std::vector<Vertex> light_normals;  // per light triangle, unit, world
   TriangleMesh lights_world;          // every light triangle, world space
@@ -142,6 +145,7 @@ struct RenderWorld::Impl {
   std::vector<BoundingBox> instance_bounds;
   std::vector<Sphere> instance_spheres;
   std::vector<const TangentSides*> instance_sides;
+  std::vector<double> instance_pads;  // per instance: its bound on Embree's float rounding, world units
   std::vector<const TriangleMesh*> instance_meshes;
   std::map<std::string, TangentSides> mesh_sides;
   std::map<RTCScene, std::vector<ConvexInstance>> convex;  // per top scene
@@ -681,9 +685,11 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
 
     if (w.keep_solids) w.solids.push_back(std::move(solids));
     w.normal_matrices.push_back(instance.transform.linear().inverse().transpose());
+    w.instance_transforms.push_back(instance.transform);
     auto sides = w.mesh_sides.find(instance.mesh);
     if (sides == w.mesh_sides.end()) sides = w.mesh_sides.emplace(instance.mesh, tangent_sides(mesh.mesh)).first;
     w.instance_sides.push_back(&sides->second);
+    w.instance_pads.push_back(pad_world);
     w.instance_meshes.push_back(&mesh.mesh);
     BoundingBox world = world_boxes[i];
     Sphere sphere{world.empty() ? Vertex::Zero() : Vertex(0.5 * (world.min + world.max)), 0.0};
@@ -753,12 +759,29 @@ std::optional<SurfaceHit> RenderWorld::intersect(const Vertex& origin, const Ver
     const TangentSides& sides = *impl_->instance_sides[static_cast<std::size_t>(hit.instance)];
     if (!sides.behind.empty()) {
       // The winding's normal in world space; the shading normal faces the camera ray.
-      const TriangleMesh& mesh = *impl_->instance_meshes[static_cast<std::size_t>(hit.instance)];
+      const std::size_t instance = static_cast<std::size_t>(hit.instance);
+      const TriangleMesh& mesh = *impl_->instance_meshes[instance];
       const Triangle& t = mesh.triangles[rayhit.hit.primID];
-      const Vertex winding = impl_->normal_matrices[static_cast<std::size_t>(hit.instance)] *
-                             (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      const Vertex object_normal = (mesh.positions[t[1]] - mesh.positions[t[0]]).cross(mesh.positions[t[2]] - mesh.positions[t[0]]);
+      const Vertex winding = impl_->normal_matrices[instance] * object_normal;
       const bool along = winding.dot(direction) < 0;
       hit.own_mesh_behind = along ? sides.behind[rayhit.hit.primID] != 0 : sides.in_front[rayhit.hit.primID] != 0;
+      if (hit.own_mesh_behind) {
+        // The exact plane in world space. The normal matrix keeps heights: the unit object
+        // normal through it gives, at a world point, the object-unit height of its preimage,
+        // so the mesh's reach in front of the plane is its tolerance over that normal's length.
+        const double length = winding.norm(), stretch = length / object_normal.norm();
+        SurfaceHit::OwnPlane& plane = hit.own_plane;
+        plane.normal = (along ? winding : Vertex(-winding)) / length;
+        plane.anchor = impl_->instance_transforms[instance] * mesh.positions[t[0]];
+        plane.reach = sides.tolerance / stretch;
+        // Double rounding of the anchor (a transformed vertex) and of the heights: below 2^-48
+        // of the coordinates involved, the anchor's absolute ones and the scene's extent.
+        const double rounding = 0x1.0p-48 * (plane.anchor.cwiseAbs().maxCoeff() + 4 * impl_->scene_magnitude);
+        plane.near_margin = plane.reach + surface_offset(hit.position, hit.distance) / 4 + rounding;
+        plane.far_margin = plane.reach + impl_->instance_pads[instance] + rounding;
+        hit.own_mesh_behind = plane.normal.allFinite() && std::isfinite(plane.reach) && std::isfinite(plane.far_margin);
+      }
     }
   } else {
     hit.light = impl_->light_of_triangle[rayhit.hit.primID];

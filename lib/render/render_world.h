@@ -46,10 +46,28 @@ struct SurfaceHit {
   int instance = -1;  ///< scene instance, or -1 for a light
   int light = -1;     ///< light index when a light was hit
   bool light_front = false;
-  /// The instance's own mesh lies entirely on the far side of the tangent plane here (or
-  /// in it): a shadow segment that leaves towards `normal` cannot meet it again. Known for
-  /// meshes of up to 4096 triangles (walls, floors, boxes), false otherwise.
+  /// The instance's own mesh lies entirely behind the hit triangle's own plane (or in it,
+  /// up to `own_plane.reach`), seen from the side the camera ray came from. Known for meshes
+  /// of up to 4096 triangles (walls, floors, boxes), false otherwise. Not a test of a
+  /// segment by itself: use own_mesh_clear_of().
   bool own_mesh_behind = false;
+  /// The hit triangle's plane, exactly as the mesh's double-precision vertices and the
+  /// instance's transform give it (never Embree's float normal, which a sliver triangle
+  /// can tilt far off), in world space.
+  struct OwnPlane {
+    Vertex normal = Vertex::Zero();  ///< unit, towards the side the camera ray came from
+    Vertex anchor = Vertex::Zero();  ///< a vertex of the triangle
+    double reach = 0;        ///< how far in front of the plane the mesh's vertices may lie (world units)
+    double near_margin = 0;  ///< how far in front a segment's start must lie: reach, a quarter of the surface offset, rounding
+    double far_margin = 0;   ///< how far in front its end must lie: reach, the instance's float rounding bound, rounding
+    double height(const Vertex& p) const { return normal.dot(p - anchor); }
+  } own_plane;
+  /// Whether the segment from `from` (the shading point moved off this surface) to `to`
+  /// certainly misses the instance's own mesh, exactly and in Embree's float tests: the
+  /// mesh lies behind the exact plane, and both ends lie in front of it by the margins.
+  bool own_mesh_clear_of(const Vertex& from, const Vertex& to) const {
+    return own_mesh_behind && own_plane.height(from) > own_plane.near_margin && own_plane.height(to) > own_plane.far_margin;
+  }
 };
 
 /// What a shadow query should see of the instances.

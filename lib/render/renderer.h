@@ -156,7 +156,7 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
 
 /// The stochastic visibility of one shadow segment, eq. 8 with the given probabilities;
 /// `u` in [0, 1) chooses the term. Counts its queries into `stats`. With `split`, the own
-/// instance is traced exactly first, unless `own_cannot_block` (SurfaceHit::own_mesh_behind),
+/// instance is traced exactly first, unless `own_cannot_block` (SurfaceHit::own_mesh_clear_of),
 /// and the rest of the scene stochastically.
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
                              const Probabilities& probabilities, double u, bool split, RenderStats& stats,

@@ -95,7 +95,7 @@ double BoundsPoint::to_light(const Vertex& end) {
   }
   if (rest_free) {
     ++stats.bounds_unoccluded;
-    if (point_.hit->own_mesh_behind) return 1;
+    if (point_.hit->own_mesh_clear_of(x, end)) return 1;
     ++stats.exact_tests;
     return world.mesh_blocks(x, end, {.skip = -1, .only = own}) ? 0 : 1;
   }

@@ -120,6 +120,7 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
       disks_.begin(*shared_.disk_index_, *point.hit, point.position, options.split, options.self_shadow == SelfShadow::heuristic,
                    options.disk_grid_from, options.disk_clusters);
   exact_part_.begin(shared_.context_.world, point.position, partition.traced);
+  exact_part_.skip_own_where_clear(*point.hit, partition.own_alone);
   disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
   any_exact_ = partition.traced != 0;
 }
@@ -224,7 +225,7 @@ double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilit
   const RenderOptions& options = shared_.context_.options;
   const ControlVariateSample sample = control_variate_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, q,
                                                                  point_.choices->uniform(), options.split, *point_.stats,
-                                                                 point_.hit->own_mesh_behind);
+                                                                 point_.hit->own_mesh_clear_of(point_.position, end));
   if (sample.proxy_traced) {
     *point_.p1_sum += 1 - sample.trace_probability;
     *point_.p1_count += 1;

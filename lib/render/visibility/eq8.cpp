@@ -85,13 +85,13 @@ void TermChoicePoint::begin(const ShadingPoint& point) {
 double TermChoicePoint::to_light(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, probabilities_,
-                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_behind);
+                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }
 
 double TermChoicePoint::connection(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, connection_probabilities_,
-                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_behind);
+                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }
 
 }  // namespace

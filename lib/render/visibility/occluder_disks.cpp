@@ -443,12 +443,16 @@ DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& wo
                                      bool clusters) {
   DiskPartition partition;
   disks.reset(position, hit.normal);
+  const unsigned own_bit = hit.instance >= 0 ? instance_bit(static_cast<std::size_t>(hit.instance)) : 0u;
+  bool own_traced = false, shared = false;  // the own instance traced; another traced instance has its bit
   for (std::size_t i = 0; i < instances; ++i) {
     const bool is_own = static_cast<int>(i) == hit.instance;
     const std::vector<Sphere>& balls = world.occluder_spheres(i);
     if (balls.empty() || (is_own && trace_own)) {
-      // Traced exactly; the own instance needs no trace where it lies behind the tangent plane.
-      if (!(is_own && hit.own_mesh_behind)) partition.traced |= instance_bit(i);
+      // Traced exactly.
+      partition.traced |= instance_bit(i);
+      own_traced = own_traced || is_own;
+      shared = shared || (!is_own && instance_bit(i) == own_bit);
       continue;
     }
     if (clusters)
@@ -457,6 +461,7 @@ DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& wo
       disks.add(balls, is_own && own_heuristic);
     partition.disks |= instance_bit(i);
   }
+  if (own_traced && !shared && hit.own_mesh_behind) partition.own_alone = own_bit;
   disks.finish(disks.size() >= grid_from);
   return partition;
 }
@@ -513,13 +518,15 @@ DiskPartition PointDisks::begin(const OccluderDiskIndex& index, const SurfaceHit
     std::uint32_t without = index.without_spheres_[static_cast<std::size_t>(std::countr_zero(bit))];
     std::uint32_t with = index.with_spheres_[static_cast<std::size_t>(std::countr_zero(bit))];
     bool own_traced = false;
+    std::uint32_t others_traced = without;  // traced instances on the own bit besides the own one
     if (!index.has_spheres_[own]) {
-      if (hit.own_mesh_behind) --without;
+      own_traced = true, --others_traced;
     } else if (trace_own) {
       --with, skip_own_ = true;
-      own_traced = !hit.own_mesh_behind;
+      own_traced = true;
     }
     partition.traced = (partition.traced & ~bit) | (without > 0 || own_traced ? bit : 0u);
+    if (own_traced && others_traced == 0 && hit.own_mesh_behind) partition.own_alone = bit;
     partition.disks = (partition.disks & ~bit) | (with > 0 ? bit : 0u);
   }
   if (seen_.size() != index.runs_.size())
@@ -643,6 +650,7 @@ void OccluderDiskPoint::begin(const ShadingPoint& point) {
       disks_.begin(shared_.index_, *point.hit, point.position, options.self_shadow == SelfShadow::exact,
                    options.self_shadow == SelfShadow::heuristic, options.disk_grid_from, options.disk_clusters);
   traced_.begin(shared_.context_.world, point.position, partition.traced);
+  traced_.skip_own_where_clear(*point.hit, partition.own_alone);
   any_traced_ = partition.traced != 0;
 }
 

@@ -116,10 +116,14 @@ class OccluderDisks {
 /// except the own instance when `trace_own` (its balls with t < 2R skipped when
 /// `own_heuristic`), sorted into the grid when there are at least `grid_from`. `traced`:
 /// the instances to trace exactly instead (those without a sphere set, and the own one when
-/// `trace_own`, unless its mesh lies behind the tangent plane); `disks`: the others. With
+/// `trace_own`); `disks`: the others. With
 /// `clusters`, each instance's balls come in the groups of RenderWorld::occluder_clusters.
 struct DiskPartition {
   unsigned traced = 0, disks = 0;  ///< instance_bit()s
+  /// The own instance's bit when it is traced, no other traced instance shares the bit and
+  /// its mesh lies behind the hit triangle's plane: segments that clear that plane
+  /// (SurfaceHit::own_mesh_clear_of) need not trace it (ExactConnections::skip_own_where_clear).
+  unsigned own_alone = 0;
 };
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
                                      const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,

@@ -19,6 +19,7 @@ void ExactConnections::begin(const RenderWorld& world, const Vertex& from, unsig
   from_ = from;
   bits_ = bits;
   from_shells_ = world.convex_shells_holding(from);
+  own_hit_ = nullptr, own_bit_ = 0;
 }
 
 bool ExactConnections::blocked(const Vertex& end) const {

@@ -98,8 +98,14 @@ class ExactConnections {
   /// convex shell does not hold both ends. `end_shells`, if known, is
   /// convex_shells_holding(end).
   unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const {
-    return bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
+    unsigned bits = bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
+    if ((bits & own_bit_) != 0 && own_hit_->own_mesh_clear_of(from_, end)) bits &= ~own_bit_;
+    return bits;
   }
+  /// Leaves out `own_bit` (the bit of `hit`'s instance, carried by no other instance the
+  /// connections trace) from the segments that certainly miss that instance's mesh
+  /// (SurfaceHit::own_mesh_clear_of from the begin() point). Until the next begin().
+  void skip_own_where_clear(const SurfaceHit& hit, unsigned own_bit) { own_hit_ = &hit, own_bit_ = own_bit; }
   bool blocked(const Vertex& end) const;
   /// blocked[i] for ends[i]; `end_shells` as in PointVisibility::connections.
   void blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked);
@@ -108,6 +114,8 @@ class ExactConnections {
   const RenderWorld* world_ = nullptr;
   Vertex from_ = Vertex::Zero();
   unsigned bits_ = 0x7FFFFFFFu, from_shells_ = 0;
+  const SurfaceHit* own_hit_ = nullptr;
+  unsigned own_bit_ = 0;
   std::vector<unsigned> lanes_;
 };
 
