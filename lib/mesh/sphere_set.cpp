@@ -160,9 +160,17 @@ Sphere bound_of(const std::vector<Sphere>& spheres, std::size_t begin, std::size
   return {centre, radius + std::ldexp(magnitude, -40)};
 }
 
+// The smallest radius of spheres[begin, end).
+double least_radius_of(const std::vector<Sphere>& spheres, std::size_t begin, std::size_t end) {
+  double least = std::numeric_limits<double>::infinity();
+  for (std::size_t i = begin; i < end; ++i) least = std::min(least, spheres[i].radius);
+  return least;
+}
+
 void split_spheres(std::vector<Sphere>& spheres, std::size_t begin, std::size_t end, std::size_t leaf, std::vector<SphereCluster>& out) {
   if (end - begin <= leaf) {
-    out.push_back({bound_of(spheres, begin, end), static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end)});
+    out.push_back({bound_of(spheres, begin, end), static_cast<std::uint32_t>(begin), static_cast<std::uint32_t>(end), 0,
+                   least_radius_of(spheres, begin, end)});
     return;
   }
   Vertex low = Vertex::Constant(std::numeric_limits<double>::infinity()), high = -low;
@@ -193,7 +201,7 @@ std::vector<SphereCluster> cluster_spheres(std::vector<Sphere>& spheres, std::si
   for (std::size_t first = 0; first < clusters.size(); first += group) {
     const std::size_t last = std::min(first + group, clusters.size());
     const std::uint32_t begin = clusters[first].begin, end = clusters[last - 1].end;
-    headed.push_back({bound_of(spheres, begin, end), begin, end, static_cast<std::uint32_t>(last - first)});
+    headed.push_back({bound_of(spheres, begin, end), begin, end, static_cast<std::uint32_t>(last - first), least_radius_of(spheres, begin, end)});
     headed.insert(headed.end(), clusters.begin() + static_cast<std::ptrdiff_t>(first), clusters.begin() + static_cast<std::ptrdiff_t>(last));
   }
   return headed;

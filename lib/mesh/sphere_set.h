@@ -59,6 +59,7 @@ struct SphereCluster {
   Sphere bound;
   std::uint32_t begin = 0, end = 0;
   std::uint32_t children = 0;
+  double least_radius = 0;  ///< the smallest radius of its spheres
 };
 
 /// Reorders `spheres` into clusters of at most `leaf` (at least 1) by median splits along

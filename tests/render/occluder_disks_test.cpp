@@ -279,5 +279,60 @@ TEST(OccluderDisks, ClustersGiveTheAnswersOfEveryDisk) {
   EXPECT_LT(clustered_tests, flat_tests * 3 / 4);
 }
 
+// Small balls far away: radii 1e-4 to 1e-2 at 200 to 3000 units, so that each cone is
+// under 0.01 radians wide and the float test of a disk errs by far more than 2^-16 radians
+// near its edge (about 1e-7 / sin gamma, up to 5e-4 radians for the smallest). Ends are
+// aimed within 2e-3 radians of a ball's axis or silhouette. A bound's cone widened by a
+// fixed 2^-16 of its distance rejected segments its balls' own float tests hid (2 % of
+// those near silhouettes at distance 2000); widened by the float test's error bound, every
+// answer is every disk's, in the scalar, group and lazily made forms.
+TEST(OccluderDisks, ClustersGiveTheAnswersOfEveryDiskForSmallBallsFarAway) {
+  Random random(777);
+  std::uint64_t checks = 0, occluded = 0, mismatches = 0;
+  for (int p = 0; p < 600; ++p) {
+    const Vertex offset = p % 2 == 0 ? Vertex(5e3, -2e3, 1e3) : Vertex::Zero();
+    const Vertex x = offset + Vertex(random.uniform(), random.uniform(), random.uniform());
+    const Vertex n = random_unit(random);
+    const double distance = 200 + 2800 * random.uniform();
+    const Vertex direction = (random_unit(random) + 1.5 * n).normalized();
+    const Vertex centre = x + distance * direction;
+    std::vector<Sphere> balls;
+    const int count = 1 + static_cast<int>(random.below(48));
+    const double spread = std::pow(10.0, -3 + 2 * random.uniform());
+    for (int b = 0; b < count; ++b) balls.push_back({centre + spread * random.uniform() * random_unit(random), std::pow(10.0, -4 + 2 * random.uniform())});
+    const std::size_t leaf = 1 + random.below(8), group = p % 3 == 0 ? 0 : 2 + random.below(3);
+    std::vector<Sphere> ordered = balls;
+    const std::vector<SphereCluster> clusters = cluster_spheres(ordered, leaf, group);
+    OccluderDisks flat, clustered;
+    flat.reset(x, n), clustered.reset(x, n);
+    flat.add(ordered, false), clustered.add(ordered, clusters, false);
+    flat.finish(), clustered.finish();
+    std::vector<Vertex> ends;
+    std::vector<std::uint8_t> answers;
+    std::uint64_t tests = 0;
+    for (int e = 0; e < 64; ++e) {
+      const Sphere& ball = ordered[random.below(ordered.size())];
+      const Vertex v = ball.center - x;
+      const double t = v.norm();
+      const Vertex u = v / t;
+      Vertex side = random_unit(random);
+      side = (side - side.dot(u) * u).normalized();
+      const double angle = (e % 2 == 0 ? std::asin(ball.radius / t) : 0.0) + 2e-3 * (2 * random.uniform() - 1) * std::pow(10.0, -3 * random.uniform());
+      ends.push_back(x + (t + 1 + 5 * random.uniform()) * (std::cos(angle) * u + std::sin(angle) * side));
+      const bool answer = flat.occludes(ends.back(), tests);
+      answers.push_back(answer ? 1 : 0);
+      occluded += answer ? 1 : 0;
+      mismatches += clustered.occludes(ends.back(), tests) != answer ? 1 : 0;
+      ++checks;
+    }
+    std::vector<std::uint8_t> grouped(ends.size());
+    clustered.occludes(ends, grouped, tests);
+    for (std::size_t k = 0; k < ends.size(); ++k) mismatches += grouped[k] != answers[k] ? 1 : 0;
+  }
+  EXPECT_EQ(mismatches, 0u) << "of " << 2 * checks << " answers";
+  EXPECT_GT(occluded, checks / 10);  // the ends do reach the disks' edges
+  EXPECT_LT(occluded, checks * 9 / 10);
+}
+
 }  // namespace
 }  // namespace visproxy

@@ -70,7 +70,7 @@ __attribute__((target_clones("avx2", "default"))) void ball_disks(const Sphere* 
 
 }  // namespace
 
-void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound) {
+void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius) {
   DiskGroup group;
   group.begin = static_cast<std::uint32_t>(disks_.ux.size());
   const std::size_t count = static_cast<std::size_t>(last - first);
@@ -88,29 +88,43 @@ void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self
   disks_.pad_to(kDiskBlock);
   count_ += group.count;
   if (bound) {
-    const DiskGroup cone = bound_cone(*bound);
+    const DiskGroup cone = bound_cone(*bound, least_radius);
     group.ux = cone.ux, group.uy = cone.uy, group.uz = cone.uz, group.cos = cone.cos;
   }
   groups_.push_back(group);
 }
 
-DiskGroup OccluderDisks::bound_cone(const Sphere& bound) const {
-  // The bound's cone, its radius grown by 2^-16 of its distance: at least 2^-16 radians
-  // wider on every side than the cones of the balls it holds, while the single-precision
-  // comparisons err by about 1e-6 radians.
-  DiskGroup group;
+DiskGroup OccluderDisks::bound_cone(const Sphere& bound, double least_radius) const {
+  // A direction the float test passes for a held ball of half-angle g lies within
+  // g + spread of the ball's axis, spread = acos(cos g - e) - g, so within G + spread of the
+  // bound's (G its half-angle: the ball's cone lies in the bound's). The bound's own float
+  // test passes every direction whose exact cosine exceeds its stored cosine by e: the
+  // stored cosine is cos(G + spread) - e, rounded down. Angles are added through their
+  // cosines and sines, with g at its least (the least radius at the farthest distance).
+  DiskGroup group;  // every direction
   const Vertex v = bound.center - x_;
-  const double t = v.norm(), radius = bound.radius + std::ldexp(t, -16);
-  if (t > radius) {
-    const Vertex u = v / t;
-    group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
-    group.cos = static_cast<float>(std::sqrt(t * t - radius * radius) / t);
-  }
+  const double t = v.norm();
+  if (!(t > bound.radius)) return group;
+  const double sin_bound = bound.radius / t, cos_bound = std::sqrt((t - bound.radius) * (t + bound.radius)) / t;
+  const double sin_least = std::clamp(least_radius / (t + bound.radius), 0.0, sin_bound);
+  const double cos_least = std::sqrt(std::max(0.0, 1 - sin_least * sin_least));
+  const double cos_reach = cos_least - kDiskTestError;  // cos(g + spread)
+  const double sin_reach = std::sqrt(std::max(0.0, 1 - cos_reach * cos_reach));
+  const double cos_rest = cos_bound * cos_least + sin_bound * sin_least;  // cos(G - g)
+  const double sin_rest = std::max(0.0, sin_bound * cos_least - cos_bound * sin_least);
+  // cos(G + spread) = cos((G - g) + (g + spread)); 2^-40 more for the double arithmetic.
+  const double cos_cone = cos_rest * cos_reach - sin_rest * sin_reach - kDiskTestError - 0x1.0p-40;
+  if (!(cos_cone > -1)) return group;
+  const Vertex u = v / t;
+  group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
+  float stored = static_cast<float>(cos_cone);
+  if (static_cast<double>(stored) > cos_cone) stored = std::nextafter(stored, -2.0f);
+  group.cos = stored;
   return group;
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
-  add_balls(spheres.data(), spheres.data() + spheres.size(), self_heuristic, nullptr);
+  add_balls(spheres.data(), spheres.data() + spheres.size(), self_heuristic, nullptr, 0);
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic) {
@@ -122,16 +136,16 @@ void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<Sp
       continue;
     }
     if (cluster.children == 0) {
-      add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound);
+      add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound, cluster.least_radius);
       continue;
     }
     // A head: its cone, then the groups of the clusters it heads that keep a ball.
     const std::size_t head = groups_.size();
-    DiskGroup header = bound_cone(cluster.bound);
+    DiskGroup header = bound_cone(cluster.bound, cluster.least_radius);
     groups_.push_back(header);
     for (std::size_t k = 0; k < cluster.children; ++k) {
       const SphereCluster& child = clusters[c + 1 + k];
-      add_balls(spheres.data() + child.begin, spheres.data() + child.end, self_heuristic, &child.bound);
+      add_balls(spheres.data() + child.begin, spheres.data() + child.end, self_heuristic, &child.bound, child.least_radius);
     }
     c += cluster.children;
     groups_[head].span = static_cast<std::uint32_t>(groups_.size() - head - 1);
@@ -578,7 +592,7 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t
           seen_[r] = stamp_;
           if (clusters_) {
             group_[r] = disks_.behind(cluster.bound) ? kNoGroup : kNotMade;
-            cone_[r] = disks_.bound_cone(cluster.bound);
+            cone_[r] = disks_.bound_cone(cluster.bound, cluster.least_radius);
           } else {
             group_[r] = kNotMade, cone_[r] = DiskGroup{};
           }
@@ -593,7 +607,7 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t
           const std::vector<Sphere>& balls = world.occluder_spheres(run.instance);
           const std::size_t first = disks_.groups();
           disks_.add_run(balls.data() + cluster.begin, balls.data() + cluster.end, own && own_heuristic_,
-                         clusters_ ? &cluster.bound : nullptr);
+                         clusters_ ? &cluster.bound : nullptr, cluster.least_radius);
           group_[r] = disks_.groups() > first ? static_cast<std::uint32_t>(first) : kNoGroup;
         }
         return group_[r] != kNoGroup && disks_.group_disks_occlude(group_[r], dx, dy, dz, zf, tests);

@@ -31,9 +31,10 @@ struct DiskGroup {
 /// The balls of a set as occluder disks from one point, in structure-of-arrays form
 /// (single precision), in groups: the balls of one cluster (SphereCluster) after each other,
 /// padded to a multiple of kDiskBlock with balls that hide nothing. A group with a bound
-/// has that bound's cone too, grown by 2^-16 of its distance (a margin far above
-/// single-precision rounding): a segment outside it is outside every cone of the group's
-/// balls, so the group's balls need no test. The answers are those of testing every ball.
+/// has that bound's cone too, widened by what the single-precision test of its smallest
+/// ball can err (bound_cone): a segment that the single-precision test finds outside it is
+/// one that the same test finds outside every cone of the group's balls, so the group's balls
+/// need no test. The answers are those of testing every ball.
 class OccluderDisks {
  public:
   static constexpr std::size_t kDiskBlock = 16;
@@ -65,9 +66,10 @@ class OccluderDisks {
   /// cell: each cell's disks across the segments whose direction falls into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
   /// Adds the balls [first, last) as one group, with the cone of `bound` (a ball holding
-  /// them) when it is given: one cluster of a set, as add() with clusters adds it.
-  void add_run(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound) {
-    add_balls(first, last, self_heuristic, bound);
+  /// them, the least of whose radii is `least_radius`) when it is given: one cluster of a
+  /// set, as add() with clusters adds it.
+  void add_run(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius = 0) {
+    add_balls(first, last, self_heuristic, bound, least_radius);
   }
   /// occludes() for the groups [first, last) alone (as groups() counts them; a head's span
   /// must end within the range): a set's groups, added by one add().
@@ -84,9 +86,16 @@ class OccluderDisks {
   /// Grid cells per side over [-1, 1]^2 of the projection.
   static constexpr int kGridSide = 8;
 
-  /// The cone from x of a ball that holds a group's balls, grown as add_run() grows it
-  /// (cos < -1 when x is inside it).
-  DiskGroup bound_cone(const Sphere& bound) const;
+  /// The cone from x of `bound`, a ball that holds balls whose least radius is
+  /// `least_radius`, widened so that every segment the single-precision disk test finds in
+  /// one of their cones is found in it by the same test (cos < -1, every direction, when x
+  /// is inside the bound). The disk test w . u > cos gamma |w| in float errs by at most
+  /// kDiskTestError |w| (roundings of w, u, cos gamma, |w|, three products and two sums:
+  /// under 8 units of 2^-24, taken as 16); a ball whose cone has half-angle g is then passed
+  /// by directions up to acos(cos g - kDiskTestError) - g beyond it, which is largest for
+  /// the smallest cone: sin g >= least_radius / (|O - x| + R) for a bound (O, R).
+  DiskGroup bound_cone(const Sphere& bound, double least_radius) const;
+  static constexpr double kDiskTestError = 0x1.0p-20;
   /// Whether a ball lies wholly behind the tangent plane at x, so that none it holds can
   /// hide a segment; the test add() makes for each cluster.
   bool behind(const Sphere& bound) const { return n_.dot(bound.center - x_) <= -bound.radius; }
@@ -100,7 +109,7 @@ class OccluderDisks {
       while (ux.size() % multiple != 0) push(0, 0, 1, 2, 0);  // hides nothing: cos gamma above any cosine
     }
   };
-  void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound);
+  void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius);
 
   Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;
@@ -159,8 +168,9 @@ class OccluderDiskIndex {
 /// costs the same whatever the instances, and a cluster's disks are made the first time a
 /// segment from the point may meet its balls: the index's tree is searched with the
 /// segment lengthened, and the boxes grown, by 2^-8 of its length, which holds every
-/// segment the single-precision test can find hidden (it errs by under 1e-3 radians, for
-/// the smallest balls), so that the answers are those of every disk. A cluster the search
+/// segment the single-precision test can find hidden (it errs by at most
+/// sqrt(2 kDiskTestError) < 1.5e-3 radians, for the smallest balls), so that the answers are
+/// those of every disk. A cluster the search
 /// finds is first tested by the cone of its bound alone, made once per point, and its
 /// disks are made only for a segment inside that cone (with clusters; the same test the
 /// cluster's group makes before its disks).
