@@ -1,9 +1,12 @@
 #include "visproxy/mesh/triangle_mesh.h"
 
+#include <Eigen/LU>
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "visproxy/core/errors.h"
@@ -80,6 +83,8 @@ void append_mesh(TriangleMesh& mesh, const TriangleMesh& part) {
 TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform) {
   TriangleMesh result = mesh;
   for (Vertex& p : result.positions) p = transform * p;
+  if (transform.linear().determinant() < 0)
+    for (Triangle& t : result.triangles) std::swap(t[1], t[2]);
   return result;
 }
 

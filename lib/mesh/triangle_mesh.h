@@ -74,7 +74,9 @@ std::vector<Vertex> used_positions(const TriangleMesh& mesh);
 /// Adds `part`'s vertices and triangles to `mesh` (indices shifted; nothing is welded).
 void append_mesh(TriangleMesh& mesh, const TriangleMesh& part);
 
-/// `mesh` with every vertex mapped by `transform` (triangles as they are).
+/// `mesh` with every vertex mapped by `transform`. A mirroring transform (negative
+/// determinant) also reverses every triangle's winding, so that a closed mesh's outward
+/// normals stay outward (as glTF draws mirrored nodes); otherwise the triangles are as they are.
 TriangleMesh transformed_mesh(const TriangleMesh& mesh, const Eigen::Affine3d& transform);
 
 }  // namespace visproxy

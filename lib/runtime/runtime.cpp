@@ -90,11 +90,17 @@ PlacedProxy RuntimeProxy::place(const Placement& placement) const {
   out.origin_ = placement.origin;
   const Eigen::Affine3d& t = placement.transform;
   const TriangleMesh source_world = transformed_mesh(source_, t);
+  // Triangles keep their claims under any invertible affine map (convexity and containment
+  // are affine properties; a mirror keeps its winding outward, transformed_mesh); balls
+  // need a similarity to stay balls.
+  if (!(std::abs(t.linear().determinant()) > 0) || !t.matrix().allFinite())
+    throw Error("proxy " + name_ + ": the placement's transform must be finite and invertible");
   const std::optional<std::vector<Sphere>> balls = transformed_spheres(spheres_, t);
-  if (!balls) throw Error("proxy " + name_ + ": sphere proxies need a placement without shear or uneven scale");
+  if (!spheres_.empty() && !balls) throw Error("proxy " + name_ + ": sphere proxies need a placement without shear or uneven scale");
   TriangleMesh world = transformed_mesh(mesh_, t);
   double m = std::max({placement.ray_magnitude, magnitude(world, placement.origin), magnitude(source_world, placement.origin)});
-  for (const Sphere& s : *balls) m = std::max(m, (s.center - placement.origin).cwiseAbs().maxCoeff() + s.radius);
+  if (balls)
+    for (const Sphere& s : *balls) m = std::max(m, (s.center - placement.origin).cwiseAbs().maxCoeff() + s.radius);
   const double pad = kFloatRoundingBound * m;
   out.pad_ = pad;
 

@@ -44,8 +44,9 @@ struct RuntimeLoadOptions {
 
 /// Where your renderer's single-precision coordinates come from.
 struct Placement {
-  /// World from mesh: the instance's transform. Sphere proxies need a similarity (rotation,
-  /// translation, uniform scale).
+  /// World from mesh: the instance's transform, finite and invertible. Triangle proxies keep
+  /// their claims under any such map (shear, uneven scale and mirrors included); sphere
+  /// proxies need a similarity (rotation or reflection, translation, uniform scale).
   Eigen::Affine3d transform = Eigen::Affine3d::Identity();
   /// The world point your Embree coordinates are relative to (0 if you pass world
   /// coordinates as they are): vertices are handed over as world - origin.

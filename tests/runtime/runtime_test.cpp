@@ -7,6 +7,8 @@
 #include <string>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/evaluate/verify_proxy.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
@@ -120,19 +122,21 @@ struct EmbreeWorld {
 // bites: where the hull's faces touch the mesh, and along the balls' silhouettes. Without
 // the rounding bound (PlacedProxy's scaling and shrinking), 90 of about 3000 segments the
 // mesh blocks miss the hull, and 6 that the balls block miss the mesh.
-TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
-  const Eigen::Affine3d far = Eigen::Translation3d(2.0e4, -1.5e4, 3.0e4) * Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized());
-  const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
-  const RuntimeProxy inside = RuntimeProxy::load(folder_, "inside-10", mesh_path_);
+// The claims under `far`, a placement far from the origin; the inside balls only when it is
+// a similarity (`with_balls`).
+void expect_claims_survive_float_rays(const std::filesystem::path& folder, const std::filesystem::path& mesh_path,
+                                      const TriangleMesh& knot, const Eigen::Affine3d& far, bool with_balls) {
+  const RuntimeProxy hull = RuntimeProxy::load(folder, "hull-32", mesh_path);
+  const RuntimeProxy inside = RuntimeProxy::load(folder, "inside-10", mesh_path);
   const PlacedProxy placed_hull = hull.place({.transform = far});
-  const PlacedProxy placed_inside = inside.place({.transform = far});
+  const PlacedProxy placed_inside = with_balls ? inside.place({.transform = far}) : inside.place({.transform = Eigen::Affine3d(Eigen::Translation3d(far.translation()))});
   ASSERT_EQ(placed_hull.kind(), ProxyKind::outside) << placed_hull.note();
   ASSERT_EQ(placed_inside.kind(), ProxyKind::inside) << placed_inside.note();
   EXPECT_GT(placed_hull.rounding_bound(), 1e-3);  // 2^-21 of 3e4: coarse floats
 
   EmbreeWorld hull_world, ball_world;
-  hull_world.add_mesh(knot_, far);
-  ball_world.add_mesh(knot_, far);
+  hull_world.add_mesh(knot, far);
+  ball_world.add_mesh(knot, far);
   placed_hull.attach(hull_world.device, hull_world.proxy);
   placed_inside.attach(ball_world.device, ball_world.proxy);
   for (RTCScene s : {hull_world.proxy, hull_world.mesh, ball_world.proxy, ball_world.mesh}) rtcCommitScene(s);
@@ -140,7 +144,7 @@ TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
   std::mt19937_64 random(42);
   std::normal_distribution<double> normal;
   auto direction = [&] { return Vertex(normal(random), normal(random), normal(random)).normalized(); };
-  const BoundingBox box = bounding_box(knot_);
+  const BoundingBox box = bounding_box(knot);
   const double reach = 2 * box.diagonal();
   // Where the hull touches the mesh: for each of its faces, the mesh vertex nearest the
   // face's plane (its support point). Segments run along the face through that point, a
@@ -150,8 +154,8 @@ TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
   for (int i = 0; i < 6000; ++i) {
     const Triangle& f = faces.triangles[static_cast<std::size_t>(i) % faces.triangles.size()];
     const Vertex n = (faces.positions[f[1]] - faces.positions[f[0]]).cross(faces.positions[f[2]] - faces.positions[f[0]]).normalized();
-    const Vertex* support = &knot_.positions[0];
-    for (const Vertex& p : knot_.positions)
+    const Vertex* support = &knot.positions[0];
+    for (const Vertex& p : knot.positions)
       if (p.dot(n) > support->dot(n)) support = &p;
     Vertex along = n.cross(direction()).normalized();
     const Vertex through = far * (*support + 4e-3 * normal(random) * n);
@@ -166,6 +170,7 @@ TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
   }
   EXPECT_GT(mesh_hits, 100u);
   EXPECT_EQ(hull_misses_where_mesh_hits, 0u) << "of " << mesh_hits << " segments the mesh blocks";
+  if (!with_balls) return;
 
   std::size_t ball_hits = 0, balls_hit_where_mesh_misses = 0;
   for (int i = 0; i < 3000; ++i) {
@@ -182,6 +187,58 @@ TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
   }
   EXPECT_GT(ball_hits, 100u);
   EXPECT_EQ(balls_hit_where_mesh_misses, 0u) << "of " << ball_hits << " segments the balls block";
+}
+
+TEST_F(Runtime, FarFromTheOriginTheClaimsSurviveFloatRays) {
+  expect_claims_survive_float_rays(folder_, mesh_path_, knot_,
+                                   Eigen::Translation3d(2.0e4, -1.5e4, 3.0e4) * Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized()), true);
+}
+
+// A mirror keeps both claims (the balls stay balls); uneven scale and shear keep the hull's
+// (a convex hull stays convex under any affine map) and were refused before for want of balls.
+TEST_F(Runtime, MirroredAndUnevenlyScaledPlacementsKeepTheirClaims) {
+  const Eigen::Affine3d rotated = Eigen::Translation3d(2.0e4, -1.5e4, 3.0e4) * Eigen::AngleAxisd(0.7, Vertex(1, 2, 3).normalized());
+  expect_claims_survive_float_rays(folder_, mesh_path_, knot_, rotated * Eigen::Scaling(-1.0, 1.0, 1.0), true);
+  Eigen::Matrix3d sheared = Eigen::Vector3d(1.7, 0.6, 1.1).asDiagonal();
+  sheared(0, 1) = 0.4;
+  Eigen::Affine3d uneven = rotated;
+  uneven.linear() = uneven.linear() * sheared;
+  expect_claims_survive_float_rays(folder_, mesh_path_, knot_, uneven, false);
+  Eigen::Affine3d mirrored_uneven = uneven;
+  mirrored_uneven.linear() = mirrored_uneven.linear() * Eigen::Vector3d(1, -1, 1).asDiagonal();
+  expect_claims_survive_float_rays(folder_, mesh_path_, knot_, mirrored_uneven, false);
+  // Balls refuse what would make them ellipsoids; a transform that is not invertible is refused.
+  const RuntimeProxy inside = RuntimeProxy::load(folder_, "inside-10", mesh_path_);
+  EXPECT_THROW(inside.place({.transform = uneven}), Error);
+  Eigen::Affine3d flat = Eigen::Affine3d::Identity();
+  flat.linear()(2, 2) = 0;
+  EXPECT_THROW(RuntimeProxy::load(folder_, "hull-32", mesh_path_).place({.transform = flat}), Error);
+}
+
+// A manifest whose kinds were swapped by hand (files and verdicts untouched): each verdict
+// proves its own kind's claim only, so neither is trusted: refused with one line, or
+// demoted with one line when proof is not required.
+TEST_F(Runtime, SwappedKindsAreNotTrusted) {
+  for (const char* name : {"hull-32", "inside-10"}) RuntimeProxy::load(folder_, name, mesh_path_);  // proved
+  // Record the verdicts as `visproxy verify` would, then swap the kinds.
+  nlohmann::json manifest = read_manifest(folder_);
+  for (nlohmann::json& entry : manifest["proxies"])
+    entry["verify"] = verify_proxy(knot_, manifest, entry, read_proxy_geometry(folder_, entry));
+  write_manifest(folder_, manifest);
+  EXPECT_EQ(RuntimeProxy::load(folder_, "hull-32", mesh_path_, {.require_proof = true, .verify_now = false}).kind(), ProxyKind::outside);
+  std::swap(manifest["proxies"][0]["kind"], manifest["proxies"][1]["kind"]);
+  write_manifest(folder_, manifest);
+  for (const char* name : {"hull-32", "inside-10"}) {
+    const std::string error = load_error(name, mesh_path_);
+    EXPECT_NE(error.find("is not proved"), std::string::npos) << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    for (const bool verify_now : {false, true}) {
+      const RuntimeProxy demoted = RuntimeProxy::load(folder_, name, mesh_path_, {.require_proof = false, .verify_now = verify_now});
+      EXPECT_EQ(demoted.kind(), ProxyKind::general) << name;
+      EXPECT_NE(demoted.note().find("used as a general proxy"), std::string::npos) << demoted.note();
+      EXPECT_EQ(demoted.note().find('\n'), std::string::npos) << demoted.note();
+    }
+  }
 }
 
 // E[estimate] over u, exactly: the estimate is constant on each interval of u between the
