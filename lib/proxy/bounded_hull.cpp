@@ -456,12 +456,23 @@ std::vector<Plane> facet_planes(const ConvexHullResult& hull, const Vertex& cent
       const std::uint32_t f = facet_of_triangle[t];
       support[f] = std::max(support[f], planes[f].normal.dot(hull.mesh.positions[corner]));
     }
+  // A sliver facet (nearly collinear corners: points along an edge of the input turned
+  // off their line by rounding) has no plane double precision can give. It bounds next to
+  // nothing: it is left out, which only grows the polytope (containment is checked exactly
+  // at the end). A facet of real area without a plane means the hull itself is too thin.
+  const double diagonal = bounding_box(hull.mesh).diagonal();
+  std::vector<Plane> kept;
   for (std::size_t f = 0; f < facet_count; ++f) {
     planes[f].offset = support[f] - planes[f].normal.dot(center);
-    if (!planes[f].normal.allFinite() || !(planes[f].offset > 0.0))
+    if (planes[f].normal.allFinite() && planes[f].offset > 0.0) {
+      kept.push_back(planes[f]);
+      continue;
+    }
+    if (!(0.5 * area_normal[f].norm() <= 1e-12 * diagonal * diagonal))
       reject("the convex hull is too thin for its facet planes to be computed in double precision");
   }
-  return planes;
+  if (kept.size() < 4) reject("the convex hull is too thin for its facet planes to be computed in double precision");
+  return kept;
 }
 
 }  // namespace
