@@ -343,7 +343,7 @@ py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<s
   }
   py::list proxies;
   for (const BuiltProxy& proxy : built) {
-    ProxyGeometry geometry{.type = proxy.primitive_type, .mesh = {}, .spheres = proxy.spheres};
+    ProxyGeometry geometry{.type = proxy.primitive_type, .mesh = {}, .spheres = proxy.spheres, .files_problem = {}};
     if (proxy.primitive_type != PrimitiveType::sphere) geometry.mesh = proxy.mesh;
     py::dict dict = proxy_dict(proxy.name, manifest_entry(proxy), geometry);
     dict["spec"] = proxy.spec.name();

@@ -26,8 +26,8 @@ TriangleMesh scaled(TriangleMesh mesh, double factor, const Vertex& center) {
 TEST(MeasureProxies, AnOutsideProxyBeyondTheBoundingSphereIsTracedOnTheWholeLines) {
   const TriangleMesh mesh = unit_cube();
   const Vertex center(0.5, 0.5, 0.5);
-  const ProxyGeometry huge{.type = PrimitiveType::triangle, .mesh = scaled(mesh, 10, center), .spheres = {}};
-  const ProxyGeometry same{.type = PrimitiveType::triangle, .mesh = mesh, .spheres = {}};
+  const ProxyGeometry huge{.type = PrimitiveType::triangle, .mesh = scaled(mesh, 10, center), .spheres = {}, .files_problem = {}};
+  const ProxyGeometry same{.type = PrimitiveType::triangle, .mesh = mesh, .spheres = {}, .files_problem = {}};
   json manifest = {{"proxies", {{{"name", "huge"}, {"kind", "outside"}}, {{"name", "same"}, {"kind", "outside"}}}}};
   const json measured = measure_proxies(
       mesh, manifest, [&](const json&, std::size_t index) { return index == 0 ? huge : same; },
