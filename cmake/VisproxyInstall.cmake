@@ -24,13 +24,12 @@ install(PROGRAMS "${PROJECT_SOURCE_DIR}/apps/dask/visproxy_dask.py" DESTINATION 
 # The module finds libvisproxy.so three levels up, in the prefix's library folder.
 set_target_properties(visproxy_python PROPERTIES INSTALL_RPATH "$ORIGIN/../../../${CMAKE_INSTALL_LIBDIR}")
 install(TARGETS visproxy_python LIBRARY DESTINATION "lib/python3/dist-packages")
-install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/visproxy"
+install(DIRECTORY "${PROJECT_SOURCE_DIR}/lib/visproxy/" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/visproxy"
         FILES_MATCHING PATTERN "*.h"
+        PATTERN "detail" EXCLUDE
         PATTERN "embree_support.h" EXCLUDE
         PATTERN "assimp_support.h" EXCLUDE
-        PATTERN "conservative_decimation.h" EXCLUDE
-        PATTERN "alpha_wrap_shared.h" EXCLUDE
-        PATTERN "plane_quadric.h" EXCLUDE)
+        PATTERN "alpha_wrap_shared.h" EXCLUDE)
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/data/schemas/" DESTINATION "${VISPROXY_INSTALL_SCHEMADIR}")
 install(EXPORT visproxyTargets NAMESPACE visproxy:: DESTINATION "${VISPROXY_INSTALL_CMAKEDIR}")
 

@@ -30,7 +30,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
 #include "visproxy/core/process.h"
-#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/scene_proxies.h"
 #include "visproxy/render/renderer.h"
 
 namespace {
@@ -104,7 +104,7 @@ int render_one(const std::string& scene_path, std::size_t index, const Settings&
     report.instances = scene.instances.size();
     report.render_seconds = result.stats.seconds;
     report.rays = mode.options.integrator == IntegratorKind::vpl ? result.stats.vpl_connections : result.stats.shadow_rays;
-    report.disk_clusters = result.stats.disk_clusters;
+    report.disk_clusters = result.stats.disks.clusters;
     report.image_hash = fnv1a(result.image.pixels.data(), result.image.pixels.size() * sizeof(Color));
     report.ok = 1;
   });

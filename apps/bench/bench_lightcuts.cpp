@@ -30,8 +30,8 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
-#include "visproxy/evaluate/scene_proxies.h"
-#include "visproxy/render/image.h"
+#include "visproxy/render/scene_proxies.h"
+#include "visproxy/image/image.h"
 #include "visproxy/render/renderer.h"
 #include "visproxy/scene/room.h"
 
@@ -146,13 +146,13 @@ int main(int argc, char** argv) try {
       for (const Color& c : result.cut_map.pixels) largest_cut = std::max(largest_cut, c.x());
     }
     std::printf("%-8s %10.1f %8.0f%% %10.1f %8.2f %8.2fx %12llu %12llu %9.2f%% %11.3e\n",
-                std::string(visibility_bounds_name(bounds)).c_str(), cut, 100 * (cut / none_cut - 1),
+                std::string(name_of(bounds)).c_str(), cut, 100 * (cut / none_cut - 1),
                 s["shadow_rays_per_shading_point"].get<double>(), result.stats.seconds, none_time / result.stats.seconds,
                 static_cast<unsigned long long>(s["clusters_proved_unoccluded"].get<std::uint64_t>()),
                 static_cast<unsigned long long>(s["clusters_proved_occluded"].get<std::uint64_t>()),
                 100 * mean_relative_error(result.image, exact_sum.image), mean_squared_error(result.image, exact_sum.image));
     if (!images.empty()) {
-      const std::string name = std::string(visibility_bounds_name(bounds));
+      const std::string name = std::string(name_of(bounds));
       write_png(images / ("lightcuts-" + name + ".png"), result.image, 1.0);
       write_png(images / ("lightcuts-" + name + ".cut.png"), result.cut_map, largest_cut > 0 ? 1 / largest_cut : 1.0);
     }

@@ -13,7 +13,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
-#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/scene_proxies.h"
 #include "visproxy/render/renderer.h"
 
 namespace {

@@ -75,7 +75,7 @@ void run(const std::filesystem::path& path, const Settings& settings) {
   if (settings.subdivide > 0) mesh = subdivide_midpoint(mesh, settings.subdivide);
   std::printf("%s%s: %zu triangles; tets %s, pair %s, radius %s, samples %s\n", path.filename().c_str(),
               settings.subdivide > 0 ? (" subdivided " + std::to_string(settings.subdivide) + "x").c_str() : "",
-              mesh.triangles.size(), std::string(inner_tetrahedra_name(settings.circumspheres.tetrahedra)).c_str(),
+              mesh.triangles.size(), std::string(name_of(settings.circumspheres.tetrahedra)).c_str(),
               std::string(pair_distance_name(settings.merge.pair_distance)).c_str(),
               settings.merge.radius == MergeRadius::exact ? "exact" : "analytic",
               settings.circumspheres.samples > 0 ? std::to_string(settings.circumspheres.samples).c_str() : "default");

@@ -29,8 +29,8 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
 #include "visproxy/core/random.h"
-#include "visproxy/evaluate/scene_proxies.h"
-#include "visproxy/render/image.h"
+#include "visproxy/render/scene_proxies.h"
+#include "visproxy/image/image.h"
 #include "visproxy/render/renderer.h"
 #include "visproxy/render/visibility/occluder_disks.h"
 
@@ -222,10 +222,10 @@ int run(int argc, char** argv) {
         RenderOptions o = spheres;
         o.self_shadow = self;
         const RenderResult r = timed(world, o);
-        rows.push_back({spec + " occluder disks, self-shadow " + std::string(self_shadow_name(self)), r.stats.seconds,
+        rows.push_back({spec + " occluder disks, self-shadow " + std::string(name_of(self)), r.stats.seconds,
                         mse(r.image, grouped_result.image), mse(r.image, reference.image)});
         if (!images.empty())
-          write_png(images / ("spheres-" + std::to_string(level) + "-self-" + std::string(self_shadow_name(self)) + ".png"), r.image);
+          write_png(images / ("spheres-" + std::to_string(level) + "-self-" + std::string(name_of(self)) + ".png"), r.image);
       }
     }
     for (const auto& [scale, split] : cv_variants) {
@@ -242,7 +242,7 @@ int run(int argc, char** argv) {
       if (!images.empty() && scale == scales.back() && !split) write_png(images / ("control-variate-" + std::to_string(level) + ".png"), c.image);
       std::printf("  %s: occluder disks %.2f s; control variate (scale %g%s) %.2f s, exact corrections per connection %.3f\n",
                   spec.c_str(), s.stats.seconds, scale, split ? "" : ", no split", c.stats.seconds,
-                  static_cast<double>(c.stats.corrections_after_hit + c.stats.corrections_after_miss) /
+                  static_cast<double>(c.stats.control_variate.after_hit + c.stats.control_variate.after_miss) /
                       static_cast<double>(std::max<std::uint64_t>(c.stats.vpl_connections + c.stats.shadow_rays, 1)));
     }
   }

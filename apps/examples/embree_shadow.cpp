@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include <visproxy/render/image.h>
+#include <visproxy/image/image.h>
 #include <visproxy/runtime/runtime.h>
 #include <visproxy/scene/scene.h>
 

@@ -19,10 +19,9 @@
 #include <vector>
 
 #include "commands.h"
-#include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
-#include "visproxy/proxy/manifest.h"
+#include "visproxy/folder/proxy_folder.h"
 
 namespace visproxy::cli {
 namespace {
@@ -143,35 +142,26 @@ void add_build_command(CLI::App& app, int& exit_code) {
   command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl, or through Assimp .gltf, .glb, .fbx, .dae, .3ds, ...)")->required();
   command->add_option("-o,--output", options->folder, "Output folder (created if missing)")->required();
   command->add_option("--proxy", options->proxies,
-                      "Proxy to build (repeatable). aabb, obb, hull, hull:N (convex, at most N faces), wrap, "
-                      "wrap:alpha=A,offset=O (relative to the bbox diagonal; defaults 0.05 and 1/600), outer:N "
-                      "(non-convex outside mesh, at most N triangles), inner:N[,grid=G] (non-convex mesh of at most N triangles "
-                      "inside a closed mesh, started from a grid of G cells along the longest side, default sqrt(2N) within 16-256), quadric:N (at most N triangles), cluster:F "
-                      "(cell F x largest bbox extent), inside:N (N spheres inscribed in a closed mesh: every edge used as often in each direction), "
-                      "spheres:N[,N2,...][,pair=d1|d2][,merge=exact|analytic][,samples=S] (circumsphere set merged to "
-                      "N spheres keeping the GSSA; one proxy per level). Default: aabb obb hull hull:32 wrap outer:512 "
-                      "quadric:512 cluster:0.03 inside:40 spheres:100 (inside:40 is left out, with a note, when the "
-                      "mesh is not closed)");
+                      "Proxy to build (repeatable):\n" + proxy_spec_help() +
+                          "Default: aabb obb hull hull:32 wrap outer:512 quadric:512 cluster:0.03 inside:40 spheres:100 "
+                          "(inside:40 is left out, with a note, when the mesh is not closed)");
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
-  const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
   command
       ->add_option("--weld", options->weld,
                    "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
-      ->transform(CLI::CheckedTransformer(weld_modes, CLI::ignore_case));
+      ->transform(choice_transformer<Weld>());
   command->add_option("--seed", options->seed, "Seed of every random choice (error samples, box search) [default: 1]");
   command
       ->add_option("--hausdorff-samples", options->hausdorff_samples,
                    "Area-uniform samples per surface for the Hausdorff error [default: 20000]")
       ->check(CLI::Range(std::size_t{100}, std::size_t{100'000'000}));
-  const std::map<std::string, InnerTetrahedra> tets_modes{{"normals", InnerTetrahedra::normals},
-                                                          {"tetgen", InnerTetrahedra::tetgen}};
   command
       ->add_option("--tets", options->tets,
                    "How spheres:N finds the tetrahedra inside the mesh: normals (Delaunay of surface samples, "
                    "inner tetrahedra by the normal criterion; any mesh) or tetgen (TetGen's constrained "
                    "tetrahedralization; watertight meshes) [default: normals]")
-      ->transform(CLI::CheckedTransformer(tets_modes, CLI::ignore_case));
+      ->transform(choice_transformer<InnerTetrahedra>());
   command
       ->add_option("--gssa-lines", options->gssa_lines,
                    "Isotropic lines for the GSSA ratio of sphere proxies [default: 100000]")
@@ -213,12 +203,6 @@ void add_build_command(CLI::App& app, int& exit_code) {
         throw OutOfMemoryError(options->mesh, "out of memory while reading it");
       }
     }();
-    ManifestMesh described{.path = options->mesh,
-                           .weld = options->weld == Weld::never ? "never" : options->weld == Weld::always ? "always" : "auto",
-                           .vertices = mesh.positions.size(),
-                           .triangles = mesh.triangles.size(),
-                           .components = analyze_topology(mesh).components,
-                           .bounds = bounding_box(mesh)};
     BuildOptions build{.per_component = options->per_component,
                        .hausdorff_samples = options->hausdorff_samples,
                        .seed = options->seed,
@@ -245,10 +229,9 @@ void add_build_command(CLI::App& app, int& exit_code) {
       watchdog.step(std::string(spec), std::string(spec) + ": out of time while measuring its error");
     };
     build.on_step_done = [&](std::string_view spec) { watchdog.done(std::string(spec)); };
-    const std::vector<BuiltProxy> proxies = build_proxies(mesh, options->mesh, specs, build);
-    watchdog.finish();
-    write_proxy_folder(options->folder, described, proxies, build);
-    print_table(*options, described, proxies,
+    const BuiltFolder built =
+        build_proxy_folder(options->folder, mesh, options->mesh, options->weld, specs, build, [&] { watchdog.finish(); });
+    print_table(*options, built.mesh, built.proxies,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     exit_code = kSuccess;
   });

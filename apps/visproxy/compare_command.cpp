@@ -16,7 +16,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
 #include "visproxy/evaluate/plot.h"
-#include "visproxy/evaluate/scene_proxies.h"
+#include "visproxy/render/scene_proxies.h"
 #include "visproxy/render/renderer.h"
 
 namespace visproxy::cli {
@@ -154,9 +154,8 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1 << 20));
   command->add_flag("--no-count", o->no_count, "Skip the counted re-renders (traversal steps and primitive tests: nan)");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: as for render]");
-  const std::map<std::string, IntegratorKind> integrators{{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}};
   command->add_option("--integrator", o->integrator, "direct, or vpl (virtual point lights; adds occluder-disk modes for sphere sets) [default: direct]")
-      ->transform(CLI::CheckedTransformer(integrators, CLI::ignore_case));
+      ->transform(choice_transformer<IntegratorKind>({IntegratorKind::direct, IntegratorKind::vpl}));
   command->add_option("--vpls", o->vpls, "vpl: light paths [default: 1024]")->check(CLI::Range(1, 1 << 22));
   command->add_option("--bounces", o->bounces, "vpl: VPLs per light path [default: 1]")->check(CLI::Range(1, 64));
   command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, shared by the reference and every mode [default: 1]");

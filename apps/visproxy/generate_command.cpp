@@ -11,12 +11,11 @@
 #include "commands.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
-#include "visproxy/evaluate/proxy_folder.h"
-#include "visproxy/evaluate/verify_proxy.h"
-#include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/folder/proxy_folder.h"
+#include "visproxy/folder/verdict.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
-#include "visproxy/proxy/manifest.h"
+#include "visproxy/folder/proxy_folder.h"
 #include "visproxy/scene/forest.h"
 #include "visproxy/scene/hairball.h"
 #include "visproxy/scene/room.h"
@@ -102,18 +101,13 @@ void add_generate_command(CLI::App& app, int& exit_code) {
     if (error) throw IOError(o->folder, "cannot create the output folder: " + error.message());
     const std::filesystem::path mesh_path = o->folder / "hairball.ply";
     const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = o->seed, .on_start = {}};
-    const std::vector<BuiltProxy> proxies = build_proxies(mesh, mesh_path, specs, build);
+    const BuiltFolder built = build_proxy_folder(o->folder / "proxies", mesh, mesh_path, Weld::automatic, specs, build);
     write_mesh(mesh_path, mesh);
-    const nlohmann::json manifest =
-        write_proxy_folder(o->folder / "proxies",
-                           {.path = mesh_path, .weld = "auto", .vertices = mesh.positions.size(), .triangles = mesh.triangles.size(),
-                            .components = analyze_topology(mesh).components, .bounds = bounding_box(mesh)},
-                           proxies, build);
-    record_verdicts(o->folder / "proxies", manifest, mesh);
+    record_verdicts(o->folder / "proxies", built.manifest, mesh);
     write_file_atomically(o->folder / "hairball.json", hairball_scene(*o));
     std::printf("visproxy generate hairball: %zu triangles (seed %llu) in %s, scene %s, %zu proxies in %s (%.1f s)\n",
                 mesh.triangles.size(), static_cast<unsigned long long>(o->seed), mesh_path.string().c_str(),
-                (o->folder / "hairball.json").string().c_str(), proxies.size(), (o->folder / "proxies").string().c_str(),
+                (o->folder / "hairball.json").string().c_str(), built.proxies.size(), (o->folder / "proxies").string().c_str(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     exit_code = kSuccess;
   });
@@ -155,14 +149,9 @@ void add_generate_command(CLI::App& app, int& exit_code) {
       std::fprintf(stderr, "visproxy generate forest: species %zu of %zu, %zu triangles: building %zu proxies ...\n", k + 1,
                    made.species.size(), tree.triangles.size(), specs.size());
       const BuildOptions build{.per_component = false, .hausdorff_samples = 20000, .seed = forest->forest.seed, .on_start = {}};
-      const std::vector<BuiltProxy> built = build_proxies(tree, mesh_path, specs, build);
+      const BuiltFolder built = build_proxy_folder(forest->folder / proxies, tree, mesh_path, Weld::automatic, specs, build);
       write_mesh(mesh_path, tree);
-      const nlohmann::json manifest =
-          write_proxy_folder(forest->folder / proxies,
-                             {.path = mesh_path, .weld = "auto", .vertices = tree.positions.size(), .triangles = tree.triangles.size(),
-                              .components = analyze_topology(tree).components, .bounds = bounding_box(tree)},
-                             built, build);
-      record_verdicts(forest->folder / proxies, manifest, tree);
+      record_verdicts(forest->folder / proxies, built.manifest, tree);
       files.species.push_back(name);
       files.proxy_folders.push_back(proxies);
     }

@@ -92,11 +92,10 @@ void add_info_command(CLI::App& app, int& exit_code) {
               "a solid (closed: every edge used as often in each direction, which inside proxies need).");
   command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl, or through Assimp .gltf, .glb, .fbx, .dae, .3ds, ...)")->required();
   command->add_flag("--json", options->json, "Print one JSON object (schema: data/schemas/info.schema.json)");
-  const std::map<std::string, Weld> weld_modes{{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}};
   command
       ->add_option("--weld", options->weld,
                    "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
-      ->transform(CLI::CheckedTransformer(weld_modes, CLI::ignore_case));
+      ->transform(choice_transformer<Weld>());
 
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();

@@ -10,7 +10,7 @@
 
 #include "commands.h"
 #include "visproxy/evaluate/measure_proxies.h"
-#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/folder/proxy_folder.h"
 
 namespace visproxy::cli {
 namespace {

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "visproxy/core/errors.h"
-#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/folder/proxy_folder.h"
 #include "visproxy/evaluate/report.h"
 
 namespace visproxy::cli {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "commands.h"
-#include "visproxy/evaluate/proxy_folder.h"
-#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/folder/proxy_folder.h"
+#include "visproxy/folder/verdict.h"
 
 namespace visproxy::cli {
 namespace {

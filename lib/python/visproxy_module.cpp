@@ -29,17 +29,15 @@
 #include "visproxy/core/version.h"
 #include "visproxy/evaluate/batch.h"
 #include "visproxy/evaluate/measure_proxies.h"
-#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/folder/proxy_folder.h"
 #include "visproxy/evaluate/report.h"
-#include "visproxy/evaluate/scene_proxies.h"
-#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/render/scene_proxies.h"
+#include "visproxy/folder/verdict.h"
 #include "visproxy/inspect/mesh_report.h"
-#include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
-#include "visproxy/proxy/manifest.h"
-#include "visproxy/render/renderer.h"
+#include "visproxy/render/render_job.h"
 #include "visproxy/scene/scene.h"
 
 namespace py = pybind11;
@@ -266,26 +264,12 @@ std::vector<HeldProxy> held_proxies(py::handle proxies) {
   return held;
 }
 
-// ---- options ----------------------------------------------------------------------
-
-template <typename Enum>
-Enum choice(const std::string& option, const std::string& value, const std::map<std::string, Enum>& choices) {
-  if (const auto found = choices.find(value); found != choices.end()) return found->second;
-  std::string allowed;
-  for (const auto& [name, unused] : choices) allowed += (allowed.empty() ? "" : ", ") + name;
-  throw py::value_error(option + ": '" + value + "' is not one of " + allowed);
-}
-
-Weld weld_mode(const std::string& weld) {
-  return choice<Weld>("weld", weld, {{"auto", Weld::automatic}, {"never", Weld::never}, {"always", Weld::always}});
-}
-
 // ---- the functions ----------------------------------------------------------------
 
 py::tuple read_mesh_arrays(const std::filesystem::path& path, const std::string& weld) {
   TriangleMesh mesh;
   {
-    const Weld mode = weld_mode(weld);
+    const Weld mode = parse_choice<Weld>("weld", weld);
     py::gil_scoped_release release;
     mesh = read_mesh(path, {.weld = mode, .on_warning = {}});
   }
@@ -321,25 +305,17 @@ py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<s
       .hausdorff_samples = hausdorff_samples,
       .seed = seed,
       .on_start = {},
-      .tets = choice<InnerTetrahedra>("tets", tets, {{"normals", InnerTetrahedra::normals}, {"tetgen", InnerTetrahedra::tetgen}}),
+      .tets = parse_choice<InnerTetrahedra>("tets", tets),
       .gssa_lines = gssa_lines,
       .skip_inside_unless_closed = !specs_text.has_value(),
       .on_skip = {}};
   options.builders_at_once = builders_at_once;
-  weld_mode(weld);  // checked: recorded in the manifest as how the source was read
+  const Weld welded = parse_choice<Weld>("weld", weld);  // recorded in the manifest as how the source was read
   std::vector<BuiltProxy> built;
   {
     py::gil_scoped_release release;
-    built = build_proxies(mesh, source, specs, options);
-    if (output) {
-      const ManifestMesh described{.path = source,
-                                   .weld = weld,
-                                   .vertices = mesh.positions.size(),
-                                   .triangles = mesh.triangles.size(),
-                                   .components = analyze_topology(mesh).components,
-                                   .bounds = bounding_box(mesh)};
-      write_proxy_folder(*output, described, built, options);
-    }
+    built = output ? build_proxy_folder(*output, mesh, source, welded, specs, options).proxies
+                   : build_proxies(mesh, source, specs, options);
   }
   py::list proxies;
   for (const BuiltProxy& proxy : built) {
@@ -464,102 +440,57 @@ py::object batch_asset(const std::filesystem::path& mesh, const std::filesystem:
   return to_python(record);
 }
 
-py::dict render_scene(const std::filesystem::path& scene_path, const std::string& integrator, const std::string& visibility,
-                      const std::string& estimator, const std::string& probabilities, const std::string& self_shadow, int spp,
-                      int shadow_rays, std::uint64_t seed, int width, int height, std::optional<std::string> proxy,
-                      std::optional<std::filesystem::path> cache, int probe_rays, int probe_passes,
-                      double probability_floor, std::optional<double> correction_scale, bool split, std::optional<int> vpls, int bounces,
-                      std::uint64_t vpl_seed, double vpl_clamp, double seconds, std::optional<std::filesystem::path> output,
-                      int light_points, double error, int max_cut, const std::string& visibility_bounds, bool check_proofs) {
-  RenderOptions options;
-  options.integrator = choice<IntegratorKind>(
-      "integrator", integrator,
-      {{"direct", IntegratorKind::direct}, {"vpl", IntegratorKind::vpl}, {"lightcuts", IntegratorKind::lightcuts}});
-  options.lightcut.bounds = choice<VisibilityBounds>("visibility_bounds", visibility_bounds,
-                                                     {{"none", VisibilityBounds::none},
-                                                      {"lower", VisibilityBounds::lower},
-                                                      {"upper", VisibilityBounds::upper},
-                                                      {"both", VisibilityBounds::both}});
-  options.lightcut.error = error;
-  options.lightcut.max_cut = max_cut;
-  options.lightcut.check_proofs = check_proofs;
-  options.light_points = light_points;
-  options.lightcut_vpls = vpls.has_value();
-  options.visibility = choice<VisibilityMode>("visibility", visibility,
-                                              {{"exact", VisibilityMode::exact},
-                                               {"stochastic", VisibilityMode::stochastic},
-                                               {"bounds", VisibilityMode::bounds},
-                                               {"spheres", VisibilityMode::spheres}});
-  options.estimator = choice<StochasticEstimator>(
-      "estimator", estimator,
-      {{"eq8", StochasticEstimator::term_choice}, {"control-variate", StochasticEstimator::control_variate}});
-  options.probabilities = choice<ProbabilityMode>(
-      "probabilities", probabilities,
-      {{"equal", ProbabilityMode::equal}, {"adaptive", ProbabilityMode::adaptive}, {"learned", ProbabilityMode::learned}});
-  options.self_shadow = choice<SelfShadow>(
-      "self_shadow", self_shadow, {{"heuristic", SelfShadow::heuristic}, {"exact", SelfShadow::exact}, {"none", SelfShadow::none}});
-  if (options.probabilities == ProbabilityMode::learned && options.estimator != StochasticEstimator::control_variate)
-    throw py::value_error("probabilities: learned needs estimator='control-variate'");
-  if (width < 0 || height < 0) throw py::value_error("width and height: must be positive (0: the scene's)");
-  if (output && !is_linear_image_path(*output))
-    throw InvalidInputError(*output, "unsupported image format (use .pfm or .exr; a PNG is written beside it)");
-  options.spp = spp;
-  options.shadow_rays = shadow_rays;
-  options.seed = seed;
-  options.probe_rays = probe_rays;
-  options.probe_passes = probe_passes;
-  options.probability_floor = probability_floor;
-  options.correction_scale = correction_scale.value_or(options.integrator == IntegratorKind::vpl ? 0.25 : 2.0);
-  options.split = split;
-  options.vpls = vpls.value_or(1024);
-  options.bounces = bounces;
-  options.vpl_seed = vpl_seed;
-  options.vpl_clamp = vpl_clamp;
-  options.seconds = seconds;
-  validate(options);
-
-  RenderResult result;
-  json instances = json::array();
-  std::vector<std::string> notes;
+// render(scene, **options): each keyword is a render option of the one table
+// (render_options(), as the CLI's flags without "--" and with "_" for "-"); flags take a
+// bool in their positive sense (split=False is --no-split); None leaves the default.
+py::dict render_scene_file(const std::filesystem::path& scene_path, const py::kwargs& keywords) {
+  RenderJob job;
+  job.scene = scene_path;
+  for (const auto& [key, value] : keywords) {
+    const std::string name = py::cast<std::string>(key);
+    if (value.is_none()) continue;
+    if (name == "output") {
+      job.output = py::cast<std::filesystem::path>(value);
+      continue;
+    }
+    const RenderOption* option = find_render_option(name);
+    if (option == nullptr || name.starts_with("--"))
+      throw py::type_error("render() got an unexpected keyword argument '" + name + "'");
+    if (option->type == RenderOption::Type::flag)
+      option->set_flag(job, py::cast<bool>(value));
+    else
+      option->set(job, py::isinstance<py::str>(value) ? py::cast<std::string>(value) : py::cast<std::string>(py::str(value)));
+  }
+  RenderedScene rendered;
   {
     py::gil_scoped_release release;
-    Scene scene = load_scene(scene_path);
-    if (width > 0) scene.camera.width = width;
-    if (height > 0) scene.camera.height = height;
-    SceneProxyOptions proxy_options{.cache = cache.value_or(default_proxy_cache()),
-                                    .stochastic_spec = proxy,
-                                    .seed = seed,
-                                    .on_proxy = nullptr,
-                                    .on_verify = nullptr};
-    const bool cluster_bounds = options.integrator == IntegratorKind::lightcuts && options.lightcut.bounds != VisibilityBounds::none;
-    const std::vector<MeshProxies> proxies = options.visibility == VisibilityMode::exact && !cluster_bounds
-                                                 ? std::vector<MeshProxies>(scene.instances.size())
-                                                 : prepare_scene_proxies(scene, proxy_options);
-    const RenderWorld world(scene, proxies, {.counting = false, .ray_masks = true, .keep_solids = cluster_bounds});
-    notes = world.notes();
-    result = render(scene, world, options);
-    for (std::size_t i = 0; i < scene.instances.size(); ++i)
-      instances.push_back({{"mesh", scene.instances[i].mesh},
-                           {"stochastic_proxy", proxies[i].stochastic ? json(proxies[i].stochastic->spec) : json(nullptr)},
-                           {"outside_proxy", proxies[i].outside ? json(proxies[i].outside->spec) : json(nullptr)},
-                           {"inside_proxy", proxies[i].inside ? json(proxies[i].inside->spec) : json(nullptr)},
-                           {"stochastic_proxy_proved", proxies[i].stochastic && proxies[i].stochastic->proved}});
-    if (output) {
-      if (output->has_parent_path()) std::filesystem::create_directories(output->parent_path());
-      write_linear_image(*output, result.image);
-    }
+    rendered = visproxy::render_scene(job);
+    write_render_outputs(job, rendered);
   }
-  py::dict rendered;
-  rendered["image"] = image_array(result.image);
-  rendered["p1_map"] = result.p1_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.p1_map));
-  rendered["cut_map"] = result.cut_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.cut_map));
-  rendered["cost_map"] = image_array(result.cost_map);
-  rendered["stats"] = to_python(result.stats.to_json());
-  rendered["instances"] = to_python(instances);
-  rendered["proxy_notes"] = py::cast(notes);
-  rendered["scene"] = scene_path.string();
-  rendered["seed"] = seed;
-  return rendered;
+  const RenderResult& result = rendered.result;
+  py::dict out;
+  out["image"] = image_array(result.image);
+  out["p1_map"] = result.p1_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.p1_map));
+  out["cut_map"] = result.cut_map.pixels.empty() ? py::object(py::none()) : py::object(image_array(result.cut_map));
+  out["cost_map"] = image_array(result.cost_map);
+  out["stats"] = to_python(result.stats.to_json());
+  out["instances"] = to_python(rendered.document["instances"]);
+  out["proxy_notes"] = py::cast(rendered.notes);
+  out["scene"] = scene_path.string();
+  out["seed"] = job.options.seed;
+  return out;
+}
+
+// The render keywords for the docstring: name, the values it takes, and its help.
+std::string render_keywords_help() {
+  std::string text;
+  for (const RenderOption& option : render_options()) {
+    text += "\n  ";
+    text += option.name;
+    text += option.type == RenderOption::Type::flag ? " (bool)" : "";
+    text += ": " + option.help;
+  }
+  return text;
 }
 
 }  // namespace
@@ -657,15 +588,12 @@ PYBIND11_MODULE(visproxy, m) {
   m.def("batch_merge", [](const std::filesystem::path& folder) { return to_python(visproxy::batch_merge(folder)); }, "folder"_a,
         "Writes FOLDER/summary.json, summary.csv and summary.html from every asset record in the batch folder (all "
         "shards) and returns the summary as a dict: counts, records, one row per asset and proxy, timed_fields.");
-  m.def("render", &render_scene, "scene"_a, py::kw_only(), "integrator"_a = "direct", "visibility"_a = "exact",
-        "estimator"_a = "eq8", "probabilities"_a = "equal", "self_shadow"_a = "heuristic", "spp"_a = 16,
-        "shadow_rays"_a = 1, "seed"_a = 1, "width"_a = 0, "height"_a = 0, "proxy"_a = py::none(), "cache"_a = py::none(),
-        "probe_rays"_a = 16, "probe_passes"_a = 0, "probability_floor"_a = 0.05, "correction_scale"_a = py::none(),
-        "split"_a = true, "vpls"_a = py::none(), "bounces"_a = 1, "vpl_seed"_a = 1, "vpl_clamp"_a = 0.05, "seconds"_a = 0.0,
-        "output"_a = py::none(), "light_points"_a = 1024, "error"_a = 0.02, "max_cut"_a = 1000, "visibility_bounds"_a = "none",
-        "check_proofs"_a = false,
-        "Renders a scene file as 'visproxy render' does with the same options (names as the CLI's, '-' kept in values "
-        "such as 'control-variate'; vpls None: 1024 light paths for integrator 'vpl', none for 'lightcuts'). Returns a "
-        "dict: image (H, W, 3) float64 linear radiance, p1_map, cut_map (lightcuts: mean clusters per cut), cost_map, "
-        "stats, instances, proxy_notes. With `output` (.pfm or .exr), also writes the image there.");
+  static const std::string render_help =
+      "render(scene, **options): renders a scene file as 'visproxy render' does. Each keyword is an option of that "
+      "command, named as its flag without '--' and with '_' for '-' (values such as 'control-variate' keep their '-'); "
+      "flags take a bool in their positive sense (split=False is --no-split); None leaves an option at its default. With "
+      "output (.pfm or .exr) the image, its PNG and OUT.stats.json are written there as the CLI writes them. Returns a "
+      "dict: image (H, W, 3) float64 linear radiance, p1_map, cut_map (lightcuts: mean clusters per cut), cost_map, stats, "
+      "instances, proxy_notes, scene, seed. Options:" + render_keywords_help();
+  m.def("render", &render_scene_file, "scene"_a, render_help.c_str());
 }

@@ -15,7 +15,7 @@
 #include "visproxy/core/files.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/write_mesh.h"
-#include "visproxy/render/image.h"
+#include "visproxy/image/image.h"
 #include "test_support.h"
 
 namespace visproxy {

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "visproxy/render/image.h"
+#include "visproxy/image/image.h"
 
 namespace visproxy {
 namespace {

@@ -26,9 +26,9 @@
 #include <string_view>
 
 #include "visproxy/core/errors.h"
-#include "visproxy/evaluate/proxy_folder.h"
+#include "visproxy/folder/proxy_folder.h"
 #include "visproxy/mesh/sphere_set.h"
-#include "visproxy/render/image.h"
+#include "visproxy/image/image.h"
 #include "visproxy/scene/scene.h"
 
 namespace {

@@ -46,14 +46,14 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
-#include "visproxy/evaluate/proxy_folder.h"
-#include "visproxy/evaluate/scene_proxies.h"
-#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/folder/proxy_folder.h"
+#include "visproxy/render/scene_proxies.h"
+#include "visproxy/folder/verdict.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/mesh/write_mesh.h"
-#include "visproxy/render/render_world.h"
+#include "visproxy/render/world/render_world.h"
 #include "visproxy/render/renderer.h"
 #include "visproxy/render/visibility/occluder_disks.h"
 #include "visproxy/runtime/runtime.h"
@@ -375,7 +375,7 @@ void check_bounds(const SceneRun& run) {
     const RenderResult exact = render_with(run, options);
     options.visibility = VisibilityMode::bounds;
     const RenderResult bounds = render_with(run, options);
-    const std::string kind = std::string("exact: bounds = exact (") + std::string(integrator_name(integrator)) + ")";
+    const std::string kind = std::string("exact: bounds = exact (") + std::string(name_of(integrator)) + ")";
     if (same_bytes(exact.image, bounds.image)) run.tally->pass(kind);
     else run.tally->fail(kind, run.index, difference_text(exact.image, bounds.image));
   }
@@ -395,7 +395,7 @@ void check_lightcuts(const SceneRun& run) {
   for (const VisibilityBounds bounds : {VisibilityBounds::lower, VisibilityBounds::upper, VisibilityBounds::both}) {
     options.lightcut = {.error = 0, .max_cut = 1, .bounds = bounds, .check_proofs = true};
     const RenderResult with = render_with(run, options);
-    const std::string kind = std::string("cuts: error 0, bounds ") + std::string(visibility_bounds_name(bounds)) + " = none";
+    const std::string kind = std::string("cuts: error 0, bounds ") + std::string(name_of(bounds)) + " = none";
     const json& described = with.stats.integrator;
     const std::uint64_t disagreements = described.value("proof_disagreements", json(0)).is_number()
                                             ? described.at("proof_disagreements").get<std::uint64_t>()
@@ -427,7 +427,7 @@ void check_disk_images(const SceneRun& run) {
       options.group_connections = variant != 3;  // 3: clusters with single rays, against every disk in packets
       const RenderResult with = render_with(run, options);
       const char* names[] = {"clusters", "lazy", "lazy clusters", "clusters, single rays"};
-      const std::string kind = std::string("disks: ") + names[variant] + " = every disk (" + std::string(integrator_name(integrator)) + ")";
+      const std::string kind = std::string("disks: ") + names[variant] + " = every disk (" + std::string(name_of(integrator)) + ")";
       if (same_bytes(every.image, with.image)) run.tally->pass(kind);
       else run.tally->fail(kind, run.index, difference_text(every.image, with.image));
     }

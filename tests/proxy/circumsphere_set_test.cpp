@@ -8,7 +8,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "proxy/awkward_meshes.h"
-#include "visproxy/proxy/delaunay_cells.h"
+#include "visproxy/proxy/detail/delaunay_cells.h"
 #include "test_meshes.h"
 #include "visproxy/verify/containment.h"
 
@@ -102,8 +102,8 @@ TEST(CircumsphereSet, TwoFarApartCubesBothGetSpheres) {
     const CircumsphereSet set = build_circumsphere_set(two, {.tetrahedra = method, .samples = 2000});
     std::size_t near = 0, far = 0;
     for (const Sphere& s : set.spheres) (s.center.x() < 25 ? near : far) += 1;
-    EXPECT_GT(near, 0u) << inner_tetrahedra_name(method);
-    EXPECT_GT(far, 0u) << inner_tetrahedra_name(method);
+    EXPECT_GT(near, 0u) << name_of(method);
+    EXPECT_GT(far, 0u) << name_of(method);
   }
 }
 

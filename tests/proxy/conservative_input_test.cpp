@@ -2,7 +2,7 @@
 // make, against scans of every input triangle: the tree may only skip nodes that hold no
 // triangle meeting, or within the clearance of, the query.
 
-#include "visproxy/proxy/conservative_decimation.h"
+#include "visproxy/proxy/detail/conservative_decimation.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <gtest/gtest.h>

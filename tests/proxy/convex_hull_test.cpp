@@ -15,7 +15,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
-#include "visproxy/proxy/hull_facets.h"
+#include "visproxy/proxy/detail/hull_facets.h"
 #include "proxy/hull_test_support.h"
 #include "test_meshes.h"
 #include "test_support.h"

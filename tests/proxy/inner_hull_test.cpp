@@ -11,7 +11,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
-#include "visproxy/proxy/surface_samples.h"
+#include "visproxy/proxy/detail/surface_samples.h"
 #include "visproxy/verify/containment.h"
 #include "proxy/outside_proxy_checks.h"
 #include "test_meshes.h"

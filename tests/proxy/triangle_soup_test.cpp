@@ -1,4 +1,4 @@
-#include "visproxy/proxy/triangle_soup.h"
+#include "visproxy/proxy/detail/triangle_soup.h"
 
 #include <gtest/gtest.h>
 

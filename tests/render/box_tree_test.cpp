@@ -2,7 +2,7 @@
 // from the origin, with empty boxes, boxes that share one centre, and segments that only
 // graze a box's face.
 
-#include "visproxy/render/box_tree.h"
+#include "visproxy/render/world/box_tree.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "visproxy/render/image.h"
+#include "visproxy/image/image.h"
 
 #include <gtest/gtest.h>
 

@@ -14,11 +14,11 @@
 #include <random>
 
 #include "visproxy/core/errors.h"
-#include "visproxy/render/cluster_visibility.h"
-#include "visproxy/render/lightcuts.h"
+#include "visproxy/render/world/cluster_visibility.h"
+#include "visproxy/render/integrators/light_tree.h"
 #include "visproxy/render/renderer.h"
-#include "visproxy/render/sampling.h"
-#include "visproxy/render/virtual_point_lights.h"
+#include "visproxy/render/world/sampling.h"
+#include "visproxy/render/world/virtual_point_lights.h"
 #include "visproxy/scene/room.h"
 #include "render/render_test_scenes.h"
 #include "visproxy/trace/embree_support.h"

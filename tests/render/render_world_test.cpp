@@ -2,7 +2,7 @@
 // rooms, closed convex instances without proxies, unproved proxies, proxies that touch
 // their mesh, scenes far from the origin, and devices without ray masks.
 
-#include "visproxy/render/render_world.h"
+#include "visproxy/render/world/render_world.h"
 
 #include <gtest/gtest.h>
 
@@ -14,8 +14,9 @@
 #include "visproxy/proxy/inner_hull.h"
 #include "render/render_test_scenes.h"
 #include "test_meshes.h"
-#include "visproxy/render/box_tree.h"
+#include "visproxy/render/world/box_tree.h"
 #include "visproxy/render/renderer.h"
+#include "visproxy/render/visibility/visibility.h"
 #include "visproxy/trace/embree_support.h"
 #include "visproxy/verify/containment.h"
 #include "visproxy/verify/sphere_containment.h"
@@ -97,7 +98,7 @@ TEST(RenderWorld, LampInsideATracedOutsideProxyIsNotProvedFree) {
   EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 0.0, 0.05);
   const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 2, .seed = 5});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
-  EXPECT_EQ(b.stats.bounds_unoccluded, 0u);
+  EXPECT_EQ(b.stats.bounds.unoccluded, 0u);
   EXPECT_GT(b.stats.shadow_rays, 0u);
   for (const Color& c : a.image.pixels) EXPECT_EQ(c, Color::Zero());
 }
@@ -156,8 +157,8 @@ TEST(RenderWorld, ClosedRoomsInsideProxyProvesNothingAboutItsAir) {
   EXPECT_NEAR(mean_estimate(world, from, to, 1, world.stochastic_kind(1)), 1.0, 0.05);
   const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 4, .seed = 9});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
-  EXPECT_EQ(b.stats.bounds_occluded, 0u);
-  EXPECT_GT(b.stats.bounds_traced, 0u);  // the bead's loose box sent segments to the exact test
+  EXPECT_EQ(b.stats.bounds.occluded, 0u);
+  EXPECT_GT(b.stats.bounds.traced, 0u);  // the bead's loose box sent segments to the exact test
 }
 
 // The same room seen from outside (faces outwards, light outside), on a floor.
@@ -205,7 +206,7 @@ TEST(RenderWorld, InnerHullIsUsedAsAnInsideProxy) {
   EXPECT_TRUE(world.inside_blocks({0.1, 0.2, -3.005}, {0.2, 0.1, 4.99}));
   const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 4, .seed = 9});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
-  EXPECT_GT(b.stats.bounds_occluded, 0u);
+  EXPECT_GT(b.stats.bounds.occluded, 0u);
 }
 
 // A closed convex instance without a proxy stands in for itself exactly: a glass case
@@ -424,7 +425,7 @@ TEST(RenderWorld, FilterFunctionsGiveTheImagesOfRayMasks) {
   for (const VisibilityMode mode : {VisibilityMode::exact, VisibilityMode::bounds, VisibilityMode::stochastic}) {
     RenderOptions options{.visibility = mode, .spp = 3, .shadow_rays = 2, .seed = 4};
     const RenderResult a = render(scene, masked, options), b = render(scene, filtered, options);
-    EXPECT_EQ(a.image.pixels, b.image.pixels) << visibility_mode_name(mode);
+    EXPECT_EQ(a.image.pixels, b.image.pixels) << name_of(mode);
     double sum = 0;
     for (const Color& c : a.image.pixels) sum += c.x();
     EXPECT_GT(sum, 0.0);
@@ -630,7 +631,7 @@ TEST(RenderWorld, ShortcutsStayExactOnASliverFanUnderAGrazingLight) {
         sum += d, squares += d * d;
       }
       const double z = squares > 0 ? sum / std::sqrt(squares) : 0.0;
-      EXPECT_LT(std::abs(z), 4.0) << stochastic_estimator_name(estimator) << ", hair " << hair;
+      EXPECT_LT(std::abs(z), 4.0) << name_of(estimator) << ", hair " << hair;
     }
   }
 }

@@ -171,8 +171,8 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
       const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
       one = render(s.scene, world, options);
     }
-    EXPECT_EQ(many.image.pixels, one.image.pixels) << integrator_name(options.integrator) << " " << visibility_mode_name(options.visibility) << " "
-                                                    << probability_mode_name(options.probabilities);
+    EXPECT_EQ(many.image.pixels, one.image.pixels) << name_of(options.integrator) << " " << name_of(options.visibility) << " "
+                                                    << name_of(options.probabilities);
     EXPECT_EQ(many.stats.to_json(), [&] {
       nlohmann::json j = one.stats.to_json();
       j["seconds"] = many.stats.seconds;
@@ -191,9 +191,9 @@ TEST(Renderer, BoundsIsExactWithInsideProofsSharedMaskBitsAndSquashedInstances) 
   EXPECT_TRUE(world.notes().empty()) << world.notes().front();
   const auto [a, b] = testing::exact_and_bounds(s.scene, world, {.spp = 4, .shadow_rays = 3, .seed = 17});
   EXPECT_EQ(a.image.pixels, b.image.pixels);
-  EXPECT_GT(b.stats.bounds_occluded, 100u);
-  EXPECT_GT(b.stats.bounds_unoccluded, 100u);
-  EXPECT_GT(b.stats.bounds_traced, 0u);
+  EXPECT_GT(b.stats.bounds.occluded, 100u);
+  EXPECT_GT(b.stats.bounds.unoccluded, 100u);
+  EXPECT_GT(b.stats.bounds.traced, 0u);
   EXPECT_LT(b.stats.exact_tests, a.stats.exact_tests);
 }
 

@@ -10,6 +10,7 @@
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/render/renderer.h"
+#include "visproxy/render/visibility/visibility.h"
 #include "render/render_test_scenes.h"
 #include "test_support.h"
 #include "visproxy/trace/ray_scene.h"
@@ -242,8 +243,8 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
                                   Variant{StochasticEstimator::control_variate, ProbabilityMode::equal},
                                   Variant{StochasticEstimator::control_variate, ProbabilityMode::adaptive},
                                   Variant{StochasticEstimator::control_variate, ProbabilityMode::learned}}) {
-      const std::string label = proxy.spec + " " + std::string(stochastic_estimator_name(variant.estimator)) + " " +
-                                std::string(probability_mode_name(variant.probabilities));
+      const std::string label = proxy.spec + " " + std::string(name_of(variant.estimator)) + " " +
+                                std::string(name_of(variant.probabilities));
       const std::size_t n = 64;
       std::vector<std::vector<double>> exact(seeds), difference(seeds);
       for (int seed = 0; seed < seeds; ++seed) {

@@ -16,7 +16,7 @@
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
-#include "visproxy/render/virtual_point_lights.h"
+#include "visproxy/render/world/virtual_point_lights.h"
 #include "visproxy/render/visibility/occluder_disks.h"
 
 namespace visproxy {
@@ -267,7 +267,7 @@ TEST(VplIntegrator, BoundsGivesTheExactImage) {
     options.visibility = VisibilityMode::bounds;
     const RenderResult bounds = render(scene, world, options);
     EXPECT_EQ(exact.image.pixels, bounds.image.pixels) << "group " << group;
-    EXPECT_GT(bounds.stats.bounds_unoccluded, 0u);
+    EXPECT_GT(bounds.stats.bounds.unoccluded, 0u);
     EXPECT_GT(bounds.stats.vpl_connections, 0u);
   }
 }
@@ -406,9 +406,9 @@ TEST(VplIntegrator, ControlVariateWithOccluderDisksIsUnbiasedAndTheDisksAloneAre
       const RenderResult b = render(s.scene, world, options);
       ASSERT_TRUE(all_finite(b.image));
       if (variant.visibility == VisibilityMode::stochastic) {
-        EXPECT_GT(b.stats.disk_tests, 0u);
-        EXPECT_GT(b.stats.corrections_after_miss, 0u);
-        EXPECT_GT(b.stats.corrections_after_hit, 0u);
+        EXPECT_GT(b.stats.disks.tests, 0u);
+        EXPECT_GT(b.stats.control_variate.after_miss, 0u);
+        EXPECT_GT(b.stats.control_variate.after_hit, 0u);
       }
       for (std::size_t i = 0; i < n; ++i) {
         exact[seed].push_back(a.pixels[i].x());
@@ -501,13 +501,13 @@ TEST(OccluderDisks, LazyDisksGiveTheImagesOfEveryDisk) {
           const RenderResult every = render(c.scene, world, options);
           options.disk_lazy_from = 1;
           const RenderResult lazy = render(c.scene, world, options);
-          const std::string label = std::string(visibility_mode_name(visibility)) + " " + std::string(self_shadow_name(self)) +
+          const std::string label = std::string(name_of(visibility)) + " " + std::string(name_of(self)) +
                                     (clusters ? " clusters" : " no clusters") + " offset " + std::to_string(offset.x());
           EXPECT_EQ(every.image.pixels, lazy.image.pixels) << label;
-          EXPECT_LT(lazy.stats.disk_tests, every.stats.disk_tests) << label;  // the tree left disks untested
-          EXPECT_GT(lazy.stats.disk_tests, 0u) << label;
-          EXPECT_EQ(every.stats.disk_clusters, 0u) << label;  // no tree to give clusters
-          EXPECT_GT(lazy.stats.disk_clusters, 0u) << label;
+          EXPECT_LT(lazy.stats.disks.tests, every.stats.disks.tests) << label;  // the tree left disks untested
+          EXPECT_GT(lazy.stats.disks.tests, 0u) << label;
+          EXPECT_EQ(every.stats.disks.clusters, 0u) << label;  // no tree to give clusters
+          EXPECT_GT(lazy.stats.disks.clusters, 0u) << label;
         }
     // The direct integrator's shadow rays through the same disks.
     RenderOptions direct{.visibility = VisibilityMode::spheres, .spp = 2, .shadow_rays = 3, .seed = 7};
@@ -604,9 +604,9 @@ TEST(OccluderDisks, SelfShadowingModes) {
       const double mean = result.image.pixels[0].x();
       const bool shadowed = other || self == SelfShadow::none;
       if (shadowed) {
-        EXPECT_EQ(mean, 0) << self_shadow_name(self) << " other " << other;
+        EXPECT_EQ(mean, 0) << name_of(self) << " other " << other;
       } else {
-        EXPECT_GT(mean, 0) << self_shadow_name(self) << " other " << other;
+        EXPECT_GT(mean, 0) << name_of(self) << " other " << other;
       }
     }
   }

@@ -7,12 +7,12 @@
 #include <string>
 
 #include "visproxy/core/errors.h"
-#include "visproxy/evaluate/proxy_folder.h"
-#include "visproxy/evaluate/verify_proxy.h"
+#include "visproxy/folder/proxy_folder.h"
+#include "visproxy/folder/verdict.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
-#include "visproxy/proxy/manifest.h"
+#include "visproxy/folder/proxy_folder.h"
 #include "test_meshes.h"
 #include "test_support.h"
 

@@ -1,0 +1,46 @@
+#pragma once
+// The renderer: Lambertian surfaces lit by area lights, through an integrator (direct
+// illumination, Billen et al. eq. 21; or instant radiosity with virtual point lights) whose
+// shadow segments a visibility strategy answers: exact, stochastic (eq. 8 or the control
+// variate, visibility splitting eq. 27), bounds, or occluder disks of sphere sets.
+
+#include <cstdint>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string_view>
+
+#include "visproxy/image/image.h"
+#include "visproxy/render/options/render_options.h"
+#include "visproxy/render/options/render_stats.h"
+#include "visproxy/render/world/render_world.h"
+#include "visproxy/render/world/virtual_point_lights.h"
+
+namespace visproxy {
+
+struct RenderResult {
+  Image image;     ///< linear radiance
+  /// Stochastic only (else empty), grey: per pixel the mean probability that a shadow ray
+  /// traces the proxy alone (eq. 8: p1; control variate: 1 - q of the proxy's answer).
+  Image p1_map;
+  /// lightcuts only (else empty), grey: per pixel the mean number of clusters in the cut.
+  Image cut_map;
+  Image cost_map;  ///< per pixel per camera sample: traversal steps + primitive tests when counted, else segment queries
+  RenderStats stats;
+};
+
+/// Renders `scene` as seen through `world`. Each pixel has its own random stream, seeded
+/// by (seed, pixel, pass), so the image does not depend on the number of threads.
+RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options);
+
+/// Shadow segments as a renderer traces them, for measuring proxies on a scene: from points
+/// the camera sees (uniform over the image, jittered) to points sampled on the lights by
+/// area, the segments a Lambertian surface would trace (light in front of both). Points on
+/// instances in `exclude` (visibility splitting traces those exactly) and on lights are
+/// skipped. Deterministic for a seed; stops after 100 x count camera samples.
+struct ShadowSegment {
+  Vertex from, to;
+};
+std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
+                                                 std::uint64_t seed, const std::vector<bool>& exclude);
+
+}  // namespace visproxy

@@ -1,0 +1,243 @@
+// Stochastic visibility with the proxy as a control variate: V' + (V - V') [u < q] / q, with
+// q chosen by the proxy's answer (equal, adaptive from probe rays, or learned per pixel).
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "visproxy/render/visibility/occluder_disks.h"
+#include "visproxy/render/visibility/visibility.h"
+
+namespace visproxy {
+
+ControlVariateSample control_variate_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
+                                                bool own_cannot_block) {
+  ControlVariateSample sample;
+  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (!rest) return sample;
+  ++stats.proxy_tests;
+  sample.proxy_traced = true;
+  sample.proxy_blocked = world.proxy_blocks(from, to, *rest);
+  const double proxy = sample.proxy_blocked ? 0.0 : 1.0;
+  sample.trace_probability = sample.proxy_blocked ? q.after_hit : q.after_miss;
+  sample.visibility = proxy;
+  if (!(u < sample.trace_probability)) return sample;
+  ++(sample.proxy_blocked ? stats.control_variate.after_hit : stats.control_variate.after_miss);
+  ++stats.exact_tests;
+  sample.mesh_traced = true;
+  sample.mesh_blocked = world.mesh_blocks(from, to, *rest);
+  sample.visibility = proxy + ((sample.mesh_blocked ? 0.0 : 1.0) - proxy) / sample.trace_probability;
+  return sample;
+}
+
+namespace {
+
+class ControlVariateVisibility;
+
+class ControlVariatePoint final : public PointVisibility {
+ public:
+  explicit ControlVariatePoint(ControlVariateVisibility& shared) : shared_(shared) {}
+  void begin(const ShadingPoint& point) override;
+  double to_light(const Vertex& end) override {
+    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, corrections_);
+  }
+  double connection(const Vertex& end) override {
+    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, connection_corrections_);
+  }
+  void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) override;
+
+ private:
+  double answer(const Vertex& end, const CorrectionProbabilities& q);
+  // With occluder disks as V': the exactly traced part first, then the disks, corrected by
+  // the meshes of the instances the disks stand for.
+  double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
+  void learn(bool proxy_blocked, bool mesh_blocked);
+  bool disks_in_use_ = false;
+  PointDisks disks_;
+  ExactConnections exact_part_;  // traced exactly: the own instance when splitting, instances without sphere sets
+  InstanceFilter disk_part_;     // the instances the disks stand for
+  bool any_exact_ = false;
+  // connections(): per end, the lanes' filters and answers (kept to reuse their memory)
+  std::vector<Vertex> traced_ends_;
+  std::vector<unsigned> traced_lanes_;
+  std::vector<std::size_t> traced_index_;
+  std::vector<std::uint8_t> blocked_, hidden_, proxy_;
+  std::vector<double> trace_probability_;
+  ControlVariateVisibility& shared_;
+  ShadingPoint point_;
+  ProxyKind kind_ = ProxyKind::general;
+  CorrectionProbabilities corrections_, connection_corrections_;
+};
+
+class ControlVariateVisibility final : public Visibility {
+ public:
+  explicit ControlVariateVisibility(const VisibilityContext& context)
+      : context_(context),
+        options_{.scale = context.options.correction_scale, .floor = context.options.probability_floor},
+        pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0),
+        pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0) {
+    kinds_ = stochastic_kinds(context);
+    for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
+      disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
+    if (disks_) disk_index_.emplace(context.world, context.scene.instances.size(), context.options.disk_lazy_from);
+  }
+  std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<ControlVariatePoint>(*this); }
+
+ private:
+  friend class ControlVariatePoint;
+  VisibilityContext context_;
+  CorrectionOptions options_;
+  std::vector<ProxyKind> kinds_;
+  std::vector<RayTypeCounts> pixel_probes_;        // adaptive with probe_passes > 0
+  std::vector<CorrectionEvidence> pixel_evidence_;  // learned: what each pixel's corrections showed so far
+  bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
+  std::optional<OccluderDiskIndex> disk_index_;
+};
+
+void ControlVariatePoint::begin(const ShadingPoint& point) {
+  point_ = point;
+  const RenderOptions& options = shared_.context_.options;
+  kind_ = shared_.kinds_[static_cast<std::size_t>(point.hit->instance)];
+  corrections_ = equal_correction_probabilities(kind_);
+  // Segments that do not end on a light: the general form (see TermChoicePoint::begin).
+  connection_corrections_ = equal_correction_probabilities(ProxyKind::general);
+  if (options.probabilities == ProbabilityMode::adaptive) {
+    const CorrectionEvidence evidence = CorrectionEvidence::from(
+        adaptive_probe_counts(shared_.context_, point, shared_.pixel_probes_.empty() ? nullptr : &shared_.pixel_probes_[point.pixel]));
+    corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
+    connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
+  }
+  if (options.probabilities == ProbabilityMode::learned) {
+    corrections_ = correction_probabilities(kind_, shared_.pixel_evidence_[point.pixel], shared_.options_);
+    connection_corrections_ = correction_probabilities(ProxyKind::general, shared_.pixel_evidence_[point.pixel], shared_.options_);
+  }
+  disks_in_use_ = shared_.disks_;
+  if (!disks_in_use_) return;
+  // Traced exactly: the own instance when splitting, and every instance without a sphere
+  // set. The disks stand for the others.
+  const DiskPartition partition =
+      disks_.begin(*shared_.disk_index_, *point.hit, point.position, options.split, options.self_shadow == SelfShadow::heuristic,
+                   options.disk_grid_from, options.disk_clusters);
+  exact_part_.begin(shared_.context_.world, point.position, partition.traced);
+  exact_part_.skip_own_where_clear(*point.hit, partition.own_alone);
+  disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
+  any_exact_ = partition.traced != 0;
+}
+
+// A group of connections with disks as V': the same estimate per connection as
+// disk_answer(), with the exact parts and the corrections traced as packets. The
+// probabilities are those the point began with (learned ones are updated after the group
+// from every correction it traced): they depend only on draws made before the group, so
+// each estimate stays unbiased.
+void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
+  if (!disks_in_use_ || !shared_.context_.options.group_connections) return PointVisibility::connections(ends, end_shells, out);
+  const RenderWorld& world = shared_.context_.world;
+  RenderStats& stats = *point_.stats;
+  const std::size_t m = ends.size();
+  const CorrectionProbabilities q = connection_corrections_;
+  // 1. The exactly traced part (own instance, instances without sphere sets), where no
+  //    convex shell clears it.
+  blocked_.assign(m, 0);
+  if (any_exact_) {
+    traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
+    for (std::size_t i = 0; i < m; ++i) {
+      const unsigned lane = exact_part_.lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]);
+      if (lane != 0) traced_ends_.push_back(ends[i]), traced_lanes_.push_back(lane), traced_index_.push_back(i);
+    }
+    if (!traced_ends_.empty()) {
+      stats.exact_tests += traced_ends_.size();
+      std::vector<std::uint8_t>& answers = hidden_;
+      answers.resize(traced_ends_.size());
+      world.mesh_blocks(point_.position, traced_ends_, answers, {}, traced_lanes_);
+      for (std::size_t k = 0; k < traced_ends_.size(); ++k) blocked_[traced_index_[k]] = answers[k];
+    }
+  }
+  // 2. V' from the disks, all ends at once.
+  std::vector<std::uint8_t>& proxy = proxy_;
+  proxy.resize(m);
+  disks_.occludes(ends, proxy, stats.disks.tests, &stats.disks.clusters);
+  // 3. The corrections each connection draws, traced as packets.
+  traced_ends_.clear(), traced_lanes_.clear(), traced_index_.clear();
+  trace_probability_.assign(m, 0);
+  for (std::size_t i = 0; i < m; ++i) {
+    const double u = point_.choices->uniform();  // drawn for every connection, as disk_answer() does
+    out[i] = 0;
+    if (blocked_[i]) continue;
+    ++stats.proxy_tests;
+    const double p = proxy[i] ? q.after_hit : q.after_miss;
+    trace_probability_[i] = p;
+    *point_.p1_sum += 1 - p;
+    *point_.p1_count += 1;
+    out[i] = proxy[i] ? 0.0 : 1.0;
+    if (u < p) {
+      ++(proxy[i] ? stats.control_variate.after_hit : stats.control_variate.after_miss);
+      traced_ends_.push_back(ends[i]), traced_lanes_.push_back(disk_part_.bits), traced_index_.push_back(i);
+    }
+  }
+  if (traced_ends_.empty()) return;
+  stats.exact_tests += traced_ends_.size();
+  hidden_.resize(traced_ends_.size());
+  world.mesh_blocks(point_.position, traced_ends_, hidden_, {}, traced_lanes_);
+  for (std::size_t k = 0; k < traced_ends_.size(); ++k) {
+    const std::size_t i = traced_index_[k];
+    const double v = proxy[i] ? 0.0 : 1.0;
+    out[i] = v + ((hidden_[k] ? 0.0 : 1.0) - v) / trace_probability_[i];
+    learn(proxy[i] != 0, hidden_[k] != 0);
+  }
+}
+
+void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
+  if (shared_.pixel_evidence_.empty()) return;
+  CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
+  evidence.add(proxy_blocked, mesh_blocked);
+  corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
+  connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
+}
+
+double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProbabilities& q) {
+  const RenderWorld& world = shared_.context_.world;
+  RenderStats& stats = *point_.stats;
+  const double u = point_.choices->uniform();
+  if (any_exact_) {
+    // Instances whose convex shell holds both ends cannot block.
+    const unsigned lane = exact_part_.lane(end);
+    if (lane != 0) {
+      ++stats.exact_tests;
+      if (world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = lane})) return 0;
+    }
+  }
+  ++stats.proxy_tests;
+  const bool proxy_blocked = disks_.occludes(end, stats.disks.tests, &stats.disks.clusters);
+  const double proxy = proxy_blocked ? 0.0 : 1.0;
+  const double trace_probability = proxy_blocked ? q.after_hit : q.after_miss;
+  *point_.p1_sum += 1 - trace_probability;
+  *point_.p1_count += 1;
+  if (!(u < trace_probability)) return proxy;
+  ++(proxy_blocked ? stats.control_variate.after_hit : stats.control_variate.after_miss);
+  ++stats.exact_tests;
+  const bool mesh_blocked = world.mesh_blocks(point_.position, end, disk_part_);
+  learn(proxy_blocked, mesh_blocked);
+  return proxy + ((mesh_blocked ? 0.0 : 1.0) - proxy) / trace_probability;
+}
+
+double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilities& q) {
+  const RenderOptions& options = shared_.context_.options;
+  const ControlVariateSample sample = control_variate_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, q,
+                                                                 point_.choices->uniform(), options.split, *point_.stats,
+                                                                 point_.hit->own_mesh_clear_of(point_.position, end));
+  if (sample.proxy_traced) {
+    *point_.p1_sum += 1 - sample.trace_probability;
+    *point_.p1_count += 1;
+  }
+  if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);
+  return sample.visibility;
+}
+
+}  // namespace
+
+std::unique_ptr<Visibility> make_control_variate_visibility(const VisibilityContext& context) {
+  return std::make_unique<ControlVariateVisibility>(context);
+}
+
+}  // namespace visproxy

@@ -1,0 +1,103 @@
+// Stochastic visibility, eq. 8 of Billen et al.: a term drawn with p1, p2, p3, then traced;
+// visibility splitting (eq. 27) traces the own instance exactly first.
+
+#include <vector>
+
+#include "visproxy/render/visibility/visibility.h"
+
+namespace visproxy {
+
+double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                             const Probabilities& p, double u, bool split, RenderStats& stats, bool own_cannot_block) {
+  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (!rest) return 0.0;
+  ++stats.proxy_tests;
+  const bool proxy_free = !world.proxy_blocks(from, to, *rest);
+  if (u < p.p1) {
+    ++stats.eq8.terms[0];
+    return proxy_free ? 1.0 / p.p1 : 0.0;
+  }
+  if (u < p.p1 + p.p2) {
+    ++stats.eq8.terms[1];
+    if (proxy_free) return 0.0;
+    ++stats.exact_tests;
+    return world.mesh_blocks(from, to, *rest) ? 0.0 : 1.0 / p.p2;
+  }
+  ++stats.eq8.terms[2];
+  if (!proxy_free) return 0.0;
+  ++stats.exact_tests;
+  return world.mesh_blocks(from, to, *rest) ? -1.0 / p.p3 : 0.0;
+}
+
+namespace {
+
+class TermChoiceVisibility;
+
+class TermChoicePoint final : public PointVisibility {
+ public:
+  explicit TermChoicePoint(TermChoiceVisibility& shared) : shared_(shared) {}
+  void begin(const ShadingPoint& point) override;
+  double to_light(const Vertex& end) override;
+  double connection(const Vertex& end) override;
+
+ private:
+  TermChoiceVisibility& shared_;
+  ShadingPoint point_;
+  Probabilities probabilities_, connection_probabilities_;
+};
+
+class TermChoiceVisibility final : public Visibility {
+ public:
+  explicit TermChoiceVisibility(const VisibilityContext& context)
+      : context_(context), kinds_(stochastic_kinds(context)), pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0) {}
+  std::unique_ptr<PointVisibility> point_visibility() override { return std::make_unique<TermChoicePoint>(*this); }
+
+ private:
+  friend class TermChoicePoint;
+  VisibilityContext context_;
+  std::vector<ProxyKind> kinds_;  // per instance: the estimator's form for the rest of the scene
+  std::vector<RayTypeCounts> pixel_probes_;
+};
+
+void TermChoicePoint::begin(const ShadingPoint& point) {
+  point_ = point;
+  const RenderOptions& options = shared_.context_.options;
+  const ProxyKind kind = shared_.kinds_[static_cast<std::size_t>(point.hit->instance)];
+  probabilities_ = equal_probabilities(kind);
+  // Segments that do not end on a light prove nothing about outside or inside proxies that
+  // are traced as surfaces: their estimate uses the general form.
+  connection_probabilities_ = equal_probabilities(ProxyKind::general);
+  if (options.probabilities == ProbabilityMode::adaptive) {
+    const RayTypeFractions fractions = RayTypeFractions::from(
+        adaptive_probe_counts(shared_.context_, point, shared_.pixel_probes_.empty() ? nullptr : &shared_.pixel_probes_[point.pixel]));
+    probabilities_ = optimal_probabilities(kind, fractions, {.floor = options.probability_floor});
+    connection_probabilities_ = optimal_probabilities(ProxyKind::general, fractions, {.floor = options.probability_floor});
+    if (options.cost_heuristic) {
+      probabilities_ = apply_cost_heuristic(kind, probabilities_, fractions, options.probability_floor);
+      connection_probabilities_ =
+          apply_cost_heuristic(ProxyKind::general, connection_probabilities_, fractions, options.probability_floor);
+    }
+  }
+  *point.p1_sum += probabilities_.p1;
+  *point.p1_count += 1;
+}
+
+double TermChoicePoint::to_light(const Vertex& end) {
+  const RenderOptions& options = shared_.context_.options;
+  return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, probabilities_,
+                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
+}
+
+double TermChoicePoint::connection(const Vertex& end) {
+  const RenderOptions& options = shared_.context_.options;
+  return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, connection_probabilities_,
+                               point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
+}
+
+}  // namespace
+
+std::unique_ptr<Visibility> make_term_choice_visibility(const VisibilityContext& context) {
+  return std::make_unique<TermChoiceVisibility>(context);
+}
+
+}  // namespace visproxy

@@ -1,0 +1,155 @@
+#pragma once
+// Visibility strategies: how the renderer answers a shadow segment: traced exactly,
+// estimated with a proxy (eq. 8 or the control variate), proved by bounds, or approximated
+// by occluder disks. A strategy answers the segments of one shading point at a time, one
+// by one or as a group that shares the point as origin; integrators choose the segments.
+
+#include <cstddef>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "visproxy/estimator/probabilities.h"
+#include "visproxy/render/options/render_options.h"
+#include "visproxy/render/options/render_stats.h"
+#include "visproxy/render/world/render_world.h"
+#include "visproxy/render/world/sampling.h"
+
+namespace visproxy {
+
+/// A shading point as a visibility strategy sees it.
+struct ShadingPoint {
+  std::size_t pixel = 0;
+  int pass = 0;
+  const SurfaceHit* hit = nullptr;  ///< where the camera ray met the surface
+  Vertex position;                  ///< the point the segments leave from: hit->position moved off the surface
+  PixelRandom* choices = nullptr;   ///< the estimators' stream (terms, corrections, probes)
+  RenderStats* stats = nullptr;
+  /// stochastic: the pixel's running sum of the probability that a segment traces the
+  /// proxy alone, and how many values it holds (RenderResult::p1_map)
+  double* p1_sum = nullptr;
+  double* p1_count = nullptr;
+};
+
+/// The answers of one thread, for the shading point begin() was last given. Values are
+/// estimates of visibility (1 unoccluded, 0 occluded); stochastic strategies may return any
+/// real number whose mean is the visibility.
+class PointVisibility {
+ public:
+  virtual ~PointVisibility() = default;
+  virtual void begin(const ShadingPoint& point) = 0;
+  /// The segment from the point to `end`, a light sample moved off the light (light_end).
+  virtual double to_light(const Vertex& end) = 0;
+  /// A segment to a point that is not on a light (a virtual point light, moved off its
+  /// surface by segment_end). Proofs that need one end on a light are not used for it.
+  virtual double connection(const Vertex& end) = 0;
+  /// connection() for a group of ends; out[i] answers ends[i]. `end_shells`, empty or one
+  /// per end, holds RenderWorld::convex_shells_holding(ends[i]) when the caller knows it
+  /// (fixed ends such as VPLs). Strategies that trace the group as packets of rays from the
+  /// shared origin override it.
+  virtual void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) {
+    (void)end_shells;
+    for (std::size_t i = 0; i < ends.size(); ++i) out[i] = connection(ends[i]);
+  }
+  /// After the point's last segment.
+  virtual void end() {}
+};
+
+/// One per render: holds what persists across a pixel's passes and makes each thread's
+/// PointVisibility.
+class Visibility {
+ public:
+  virtual ~Visibility() = default;
+  virtual std::unique_ptr<PointVisibility> point_visibility() = 0;
+};
+
+struct VisibilityContext {
+  const Scene& scene;
+  const RenderWorld& world;
+  const RenderOptions& options;
+  const LightSampler& lights;
+  std::size_t pixels = 0;
+};
+
+std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_term_choice_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_control_variate_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_bounds_visibility(const VisibilityContext& context);
+std::unique_ptr<Visibility> make_occluder_disk_visibility(const VisibilityContext& context);
+/// The strategy `context.options` asks for.
+std::unique_ptr<Visibility> make_visibility(const VisibilityContext& context);
+
+/// The stochastic visibility of one shadow segment, eq. 8 with the given probabilities;
+/// `u` in [0, 1) chooses the term. Counts its queries into `stats`. With `split`, the own
+/// instance is traced exactly first, unless `own_cannot_block` (SurfaceHit::own_mesh_clear_of),
+/// and the rest of the scene stochastically.
+double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                             const Probabilities& probabilities, double u, bool split, RenderStats& stats,
+                             bool own_cannot_block = false);
+
+/// One shadow segment through the control-variate estimator: V' + (V - V') [u < q] / q.
+struct ControlVariateSample {
+  double visibility = 0;
+  bool proxy_traced = false;  ///< false when the own instance blocked the segment first
+  bool proxy_blocked = false;
+  double trace_probability = 0;  ///< the q the proxy's answer chose
+  bool mesh_traced = false;
+  bool mesh_blocked = false;
+};
+ControlVariateSample control_variate_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
+                                                bool own_cannot_block = false);
+
+/// With splitting, the own instance first (exactly); returns the filter for the rest of
+/// the scene, or nullopt when the own instance blocks the segment.
+std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
+                                                 bool split, RenderStats& stats, bool own_cannot_block);
+
+}  // namespace visproxy
+
+namespace visproxy {
+
+/// Connections traced exactly, as the exact strategy traces them (bounds traces its
+/// connections the same way, so that its image stays exact's): instances whose convex
+/// shell holds both ends are skipped (RenderWorld::convex_shells_holding); a group goes to
+/// Embree as packets.
+class ExactConnections {
+ public:
+  /// Segments from `from` against the instances of `bits` (instance_bit()s; all by default).
+  void begin(const RenderWorld& world, const Vertex& from, unsigned bits = 0x7FFFFFFFu);
+  /// The instances a segment to `end` must still be traced against: those of `bits` whose
+  /// convex shell does not hold both ends. `end_shells`, if known, is
+  /// convex_shells_holding(end).
+  unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const {
+    unsigned bits = bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
+    if ((bits & own_bit_) != 0 && own_hit_->own_mesh_clear_of(from_, end)) bits &= ~own_bit_;
+    return bits;
+  }
+  /// Leaves out `own_bit` (the bit of `hit`'s instance, carried by no other instance the
+  /// connections trace) from the segments that certainly miss that instance's mesh
+  /// (SurfaceHit::own_mesh_clear_of from the begin() point). Until the next begin().
+  void skip_own_where_clear(const SurfaceHit& hit, unsigned own_bit) { own_hit_ = &hit, own_bit_ = own_bit; }
+  bool blocked(const Vertex& end) const;
+  /// blocked[i] for ends[i]; `end_shells` as in PointVisibility::connections.
+  void blocked(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<std::uint8_t> blocked);
+
+ private:
+  const RenderWorld* world_ = nullptr;
+  Vertex from_ = Vertex::Zero();
+  unsigned bits_ = 0x7FFFFFFFu, from_shells_ = 0;
+  const SurfaceHit* own_hit_ = nullptr;
+  unsigned own_bit_ = 0;
+  std::vector<unsigned> lanes_;
+};
+
+/// Per instance: the kind of the rest of the scene's stochastic proxies that its shading
+/// points see (RenderWorld::stochastic_kind, the own instance left out when splitting).
+std::vector<ProxyKind> stochastic_kinds(const VisibilityContext& context);
+
+/// adaptive probabilities: the ray types seen by K probe segments from the point to the
+/// lights (rest of the scene: the own instance left out when splitting). With
+/// probe_passes > 0 the counts of the pixel's first passes are kept in `pixel_counts` and
+/// returned in later passes without probing.
+RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts);
+
+}  // namespace visproxy
