@@ -18,6 +18,7 @@
 #include "visproxy/proxy/inner_hull.h"
 #include "visproxy/proxy/inscribed_spheres.h"
 #include "visproxy/proxy/merge_spheres.h"
+#include "visproxy/proxy/meshopt_simplify.h"
 #include "visproxy/proxy/outer_hull.h"
 #include "visproxy/proxy/proxy_spec.h"
 #include "visproxy/proxy/quadric_simplify.h"
@@ -240,6 +241,16 @@ MethodPiece build_quadric(const ProxySpec& spec, const TriangleMesh& mesh, const
   return piece;
 }
 
+MethodPiece build_meshopt(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOptions&) {
+  MethodPiece piece;
+  MeshoptSimplifyResult simplified = simplify_meshopt(mesh, {.max_triangles = spec.count});
+  piece.mesh = std::move(simplified.mesh);
+  piece.result = {{"reached_target", simplified.reached_target},
+                  {"sloppy_pass", simplified.sloppy_pass},
+                  {"meshopt_error_world", simplified.error_world}};
+  return piece;
+}
+
 void parse_cluster(ProxySpec& spec, std::string_view argument) {
   spec.cell_size_relative = parse_fraction(spec, "F", argument);
 }
@@ -357,6 +368,10 @@ const std::vector<ProxyMethodRow>& proxy_methods() {
       {"quadric", "quadric", "quadric:N", Argument::required, K::general, P::triangle,
        "quadric edge collapse to at most N triangles", "quadric edge collapse", 3, parse_count_only, max_triangles,
        build_quadric, "", false},
+      {"meshopt", "meshopt", "meshopt:N", Argument::required, K::general, P::triangle,
+       "meshoptimizer's simplifier to at most N triangles (its sloppy pass where topology stops it)",
+       "meshoptimizer 0.18 edge collapse (meshopt_simplify, then meshopt_simplifySloppy if above the budget)", 4,
+       parse_count_only, max_triangles, build_meshopt, " (use a larger N)", false},
       {"clustering", "cluster", "cluster:F", Argument::required, K::general, P::triangle,
        "vertex clustering, cell F x largest bbox extent", "vertex clustering", 4, parse_cluster, cluster_params,
        build_cluster, " (use a smaller cell)", false},
