@@ -147,21 +147,19 @@ void add_build_command(CLI::App& app, int& exit_code) {
                           "(inside:40 is left out, with a note, when the mesh is not closed)");
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
-  command
-      ->add_option("--weld", options->weld,
-                   "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
-      ->transform(choice_transformer<Weld>());
+  as_choice<Weld>(command->add_option(
+      "--weld", options->weld,
+      "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]"));
   command->add_option("--seed", options->seed, "Seed of every random choice (error samples, box search) [default: 1]");
   command
       ->add_option("--hausdorff-samples", options->hausdorff_samples,
                    "Area-uniform samples per surface for the Hausdorff error [default: 20000]")
       ->check(CLI::Range(std::size_t{100}, std::size_t{100'000'000}));
-  command
-      ->add_option("--tets", options->tets,
-                   "How spheres:N finds the tetrahedra inside the mesh: normals (Delaunay of surface samples, "
-                   "inner tetrahedra by the normal criterion; any mesh) or tetgen (TetGen's constrained "
-                   "tetrahedralization; watertight meshes) [default: normals]")
-      ->transform(choice_transformer<InnerTetrahedra>());
+  as_choice<InnerTetrahedra>(
+      command->add_option("--tets", options->tets,
+                          "How spheres:N finds the tetrahedra inside the mesh: normals (Delaunay of surface samples, "
+                          "inner tetrahedra by the normal criterion; any mesh) or tetgen (TetGen's constrained "
+                          "tetrahedralization; watertight meshes) [default: normals]"));
   command
       ->add_option("--gssa-lines", options->gssa_lines,
                    "Isotropic lines for the GSSA ratio of sphere proxies [default: 100000]")

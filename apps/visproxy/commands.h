@@ -5,8 +5,11 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <initializer_list>
-#include <map>
 #include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "visproxy/core/choices.h"
 
@@ -19,14 +22,31 @@ enum ExitCode : int { kSuccess = 0, kCheckFailed = 1, kBadInput = 2, kInternalEr
 /// WarningHandler of every file the user gives.
 void print_warning(const std::string& warning);
 
-/// The CLI11 check and transform of a choice option: the names of choice_names<Enum>
-/// (case-insensitive), or only those of `only` when given.
+/// Makes `option` a choice of choice_names<Enum> (case-insensitive), or only of those in
+/// `only` when given: the help shows "{auto, never, always}", and a bad value is refused as
+/// "--weld: 'maybe' is not one of {auto, never, always}".
 template <class Enum>
-CLI::CheckedTransformer choice_transformer(std::initializer_list<Enum> only = {}) {
-  std::map<std::string, Enum> names;
+CLI::Option* as_choice(CLI::Option* option, std::initializer_list<Enum> only = {}) {
+  std::vector<std::pair<std::string_view, Enum>> names;
   for (const auto& [name, value] : choice_names<Enum>())
-    if (only.size() == 0 || std::find(only.begin(), only.end(), value) != only.end()) names.emplace(name, value);
-  return CLI::CheckedTransformer(names, CLI::ignore_case);
+    if (only.size() == 0 || std::find(only.begin(), only.end(), value) != only.end()) names.emplace_back(name, value);
+  std::string list = "{";
+  for (const auto& [name, value] : names) list += (list.size() > 1 ? ", " : "") + std::string(name);
+  list += "}";
+  option->type_name(list);
+  option->transform(CLI::Validator(
+      [names, list](std::string& text) -> std::string {
+        std::string lower = text;
+        for (char& c : lower) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+        for (const auto& [name, value] : names)
+          if (lower == name) {
+            text = std::to_string(static_cast<std::underlying_type_t<Enum>>(value));  // what CLI11 reads an enum from
+            return {};
+          }
+        return "'" + text + "' is not one of " + list;
+      },
+      "", "choice"));
+  return option;
 }
 
 void add_info_command(CLI::App& app, int& exit_code);

@@ -154,8 +154,10 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 1 << 20));
   command->add_flag("--no-count", o->no_count, "Skip the counted re-renders (traversal steps and primitive tests: nan)");
   command->add_option("--cache", o->cache, "Proxy cache folder [default: as for render]");
-  command->add_option("--integrator", o->integrator, "direct, or vpl (virtual point lights; adds occluder-disk modes for sphere sets) [default: direct]")
-      ->transform(choice_transformer<IntegratorKind>({IntegratorKind::direct, IntegratorKind::vpl}));
+  as_choice<IntegratorKind>(
+      command->add_option("--integrator", o->integrator,
+                          "direct, or vpl (virtual point lights; adds occluder-disk modes for sphere sets) [default: direct]"),
+      {IntegratorKind::direct, IntegratorKind::vpl});
   command->add_option("--vpls", o->vpls, "vpl: light paths [default: 1024]")->check(CLI::Range(1, 1 << 22));
   command->add_option("--bounces", o->bounces, "vpl: VPLs per light path [default: 1]")->check(CLI::Range(1, 64));
   command->add_option("--vpl-seed", o->vpl_seed, "vpl: seed of the light paths, shared by the reference and every mode [default: 1]");

@@ -92,10 +92,9 @@ void add_info_command(CLI::App& app, int& exit_code) {
               "a solid (closed: every edge used as often in each direction, which inside proxies need).");
   command->add_option("mesh", options->mesh, "Mesh file (.obj, .ply, .off, .stl, or through Assimp .gltf, .glb, .fbx, .dae, .3ds, ...)")->required();
   command->add_flag("--json", options->json, "Print one JSON object (schema: data/schemas/info.schema.json)");
-  command
-      ->add_option("--weld", options->weld,
-                   "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]")
-      ->transform(choice_transformer<Weld>());
+  as_choice<Weld>(command->add_option(
+      "--weld", options->weld,
+      "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]"));
 
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();

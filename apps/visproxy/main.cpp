@@ -71,6 +71,27 @@ std::string unknown_subcommand_message(CLI::App& app, const std::string& word) {
   return nearest.empty() ? message + " (see 'visproxy --help')" : message + " (did you mean '" + nearest + "'?)";
 }
 
+// "visproxy generate forest": the deepest subcommand the command line reached, for the
+// help an error points at.
+std::string command_path(const CLI::App& app) {
+  for (const CLI::App* command : app.get_subcommands())
+    if (command->parsed()) return app.get_name() + " " + command_path(*command);
+  return app.get_name();
+}
+
+// Counts and seeds are unsigned; CLI11 would read "-3" as 2^64 - 3. Every unsigned option
+// of every subcommand refuses a negative value instead.
+void refuse_negative_values(CLI::App& app) {
+  for (CLI::Option* option : app.get_options())
+    if (option->get_type_name().rfind("UINT", 0) == 0)
+      option->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            return text.find('-') == std::string::npos ? std::string() : "'" + text + "' is negative";
+          },
+          "", "non-negative"));
+  for (CLI::App* command : app.get_subcommands({})) refuse_negative_values(*command);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -94,6 +115,8 @@ int main(int argc, char** argv) {
   add_compare_command(app, exit_code);
   add_batch_command(app, exit_code);
 
+  refuse_negative_values(app);
+
   if (const std::optional<std::string> word = unknown_subcommand(app, argc, argv)) {
     std::cerr << "visproxy: " << unknown_subcommand_message(app, *word) << "\n";
     return kBadInput;
@@ -102,7 +125,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     if (error.get_exit_code() == 0) return app.exit(error);  // --help, --version
-    std::cerr << "visproxy: " << error.what() << " (see 'visproxy --help')\n";
+    std::cerr << "visproxy: " << error.what() << " (see '" << command_path(app) << " --help')\n";
     return kBadInput;
   } catch (const visproxy::OutOfMemoryError& error) {
     std::cerr << "visproxy: " << error.what() << "\n";

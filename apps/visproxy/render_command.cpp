@@ -88,7 +88,7 @@ void add_render_command(CLI::App& app, int& exit_code) {
   command
       ->add_option(
           "scene", given->job.scene,
-          "Scene file: JSON (format in README.md, schema data/schemas/scene.schema.json), or a glTF 2.0 .gltf/.glb "
+          "Scene file: JSON (format in apps/visproxy/README.md, schema data/schemas/scene.schema.json), or a glTF 2.0 .gltf/.glb "
           "(or other Assimp file) whose nodes, emissive materials and camera make the scene")
       ->required();
   command->add_option("-o,--output", given->job.output, "Output image: .pfm or .exr (linear radiance)")->required();

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include "apps/cli_test_support.h"
 #include "test_support.h"
@@ -97,7 +99,57 @@ TEST(Cli, UsageErrorsExitWithTwo) {
   EXPECT_EQ(testing::run_visproxy("info").exit_code, 2);
   const auto result = testing::run_visproxy("info x.off --weld sometimes");
   EXPECT_EQ(result.exit_code, 2);
-  EXPECT_NE(result.err.find("--weld"), std::string::npos) << result.err;
+  EXPECT_EQ(result.err,
+            "visproxy: --weld: 'sometimes' is not one of {auto, never, always} (see 'visproxy info --help')\n");
+}
+
+// A usage error names the option, what is wrong with it, and the help of the subcommand it
+// belongs to, however deep: one line, exit code 2, nothing written.
+class CliUsage : public testing::ScratchFolder {};
+
+TEST_F(CliUsage, ErrorsPointAtTheSubcommandsHelp) {
+  const std::string never = (folder_ / "never").string();
+  const std::pair<std::string, std::string> cases[] = {
+      {"build x.off -o " + never + " --tets delaunay",
+       "visproxy: --tets: 'delaunay' is not one of {normals, tetgen} (see 'visproxy build --help')\n"},
+      {"compare x.json -o " + never + " --integrator lightcuts",
+       "visproxy: --integrator: 'lightcuts' is not one of {direct, vpl} (see 'visproxy compare --help')\n"},
+      {"generate hairball -o " + never + " --frobnicate",
+       "visproxy: The following argument was not expected: --frobnicate (see 'visproxy generate hairball --help')\n"},
+  };
+  for (const auto& [arguments, expected] : cases) {
+    const auto result = testing::run_visproxy(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments;
+    EXPECT_EQ(result.err, expected) << arguments;
+    EXPECT_TRUE(result.out.empty()) << arguments << ": " << result.out;
+  }
+  EXPECT_FALSE(std::filesystem::exists(never));
+}
+
+// Seeds and counts are unsigned: "-3" is refused, not read as 2^64 - 3 and run with.
+TEST_F(CliUsage, NegativeSeedsAndCountsAreRefused) {
+  const std::string never = (folder_ / "never").string();
+  for (const std::string& arguments :
+       {"build x.off -o " + never + " --seed -3", "verify x.off " + never + " --seed -1",
+        "measure x.off " + never + " --seed -7", "generate hairball -o " + never + " --seed -2",
+        "batch list.txt -o " + never + " --seed -5"}) {
+    const auto result = testing::run_visproxy(arguments);
+    EXPECT_EQ(result.exit_code, 2) << arguments << ": " << result.out;
+    EXPECT_NE(result.err.find("' is negative (see 'visproxy "), std::string::npos) << arguments << ": " << result.err;
+    EXPECT_EQ(result.err.find('\n'), result.err.size() - 1) << "exactly one line: " << result.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(never));
+}
+
+// Choices show their names in the help, not CLI11's value map.
+TEST(Cli, ChoicesAreListedByName) {
+  const auto help = testing::run_visproxy("build --help");
+  EXPECT_NE(help.out.find("--weld {auto, never, always}"), std::string::npos) << help.out;
+  EXPECT_NE(help.out.find("--tets {normals, tetgen}"), std::string::npos) << help.out;
+  EXPECT_EQ(help.out.find("->"), std::string::npos) << help.out;
+  const auto ok = testing::run_visproxy("info x.off --weld NEVER");  // case-insensitive: fails on the file, not the choice
+  EXPECT_EQ(ok.exit_code, 2);
+  EXPECT_EQ(ok.err.find("--weld"), std::string::npos) << ok.err;
 }
 
 TEST(Cli, HelpAndVersionExitWithZero) {

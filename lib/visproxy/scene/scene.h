@@ -1,7 +1,7 @@
 #pragma once
 // Scenes for the reference renderer: instanced triangle meshes with diffuse albedo and
 // the proxies each one uses, area lights and a pinhole camera, read from a JSON file.
-// The format is documented in README.md (Scenes) and data/schemas/scene.schema.json.
+// The format is documented in apps/visproxy/README.md (Scenes) and data/schemas/scene.schema.json.
 
 #include <Eigen/Geometry>
 
