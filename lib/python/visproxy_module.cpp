@@ -12,6 +12,7 @@
 // in the input raise visproxy.InvalidInputError (a ValueError) or visproxy.FileError (an
 // OSError), both visproxy.Error, with the one-line message the CLI prints.
 
+#include <pybind11/eval.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -596,4 +597,31 @@ PYBIND11_MODULE(visproxy, m) {
       "dict: image (H, W, 3) float64 linear radiance, p1_map, cut_map (lightcuts: mean clusters per cut), cost_map, stats, "
       "instances, proxy_notes, scene, seed. Options:" + render_keywords_help();
   m.def("render", &render_scene_file, "scene"_a, render_help.c_str());
+
+  // A call whose arguments match no signature raises pybind11's TypeError, which prints
+  // every argument in full: 190 KB for a list of 3000 vertices. Every function of the module
+  // raises it with the arguments' types instead.
+  py::exec(R"py(
+def _shorten_type_errors(module):
+    import functools
+    def shortened(function):
+        @functools.wraps(function)
+        def call(*args, **kwargs):
+            try:
+                return function(*args, **kwargs)
+            except TypeError as error:
+                text = str(error)
+                if "incompatible function arguments" not in text or "Invoked with" not in text:
+                    raise
+                given = [type(a).__name__ for a in args] + [k + "=" + type(v).__name__ for k, v in kwargs.items()]
+                raise TypeError(text.split("Invoked with")[0].rstrip() + "\nInvoked with types: (" + ", ".join(given) + ")") from None
+        return call
+    for name in dir(module):
+        value = getattr(module, name)
+        if not name.startswith("_") and type(value).__name__ == "builtin_function_or_method":
+            setattr(module, name, shortened(value))
+)py",
+           m.attr("__dict__"));
+  m.attr("_shorten_type_errors")(m);
+  py::delattr(m, "_shorten_type_errors");
 }

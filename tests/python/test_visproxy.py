@@ -357,13 +357,45 @@ def test_a_bad_spec_and_a_builder_refusal_give_the_cli_message(tmp_path):
     (np.zeros((3, 3)), np.array([[0, 1, 3]]), "triangles[0, 2]: vertex index 3 is out of range (3 vertices)"),
     (np.zeros((3, 3)), np.array([[0, -1, 2]]), "triangles[0, 1]: vertex index -1 is out of range (3 vertices)"),
     (np.zeros((3, 3)), np.array([[0, 1, 2**64 - 1]], dtype=np.uint64), "triangles[0, 2]: vertex index 18446744073709551615"),
-    (np.array([[0, 0, 0], [1, 0, 0], [np.inf, 1, 0]]), np.array([[0, 1, 2]]), "vertex 2"),
+    (np.array([[0, 0, 0], [1, 0, 0], [np.inf, 1, 0]]), np.array([[0, 1, 2]]), "vertex 2: x is not finite (inf)"),
+    # A NaN between zeros: the case a maximum over the coordinates can step over.
+    (np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]]), np.array([[0, 1, 2]]), "vertex 2: y is not finite (nan)"),
+    (np.array([[0, 0, 0], [0, 0, -np.inf], [0, 1, 0]]), np.array([[0, 1, 2]]), "vertex 1: z is not finite (-inf)"),
     (np.array([["a", "b", "c"]] * 3), np.array([[0, 1, 2]]), "vertices: must hold real numbers"),
 ])
 def test_bad_arrays_raise_invalid_input_naming_the_array(vertices, triangles, expected):
     with pytest.raises(vp.InvalidInputError) as raised:
         vp.inspect(vertices, triangles, source="my arrays")
     assert str(raised.value).startswith("my arrays: ") and expected in str(raised.value)
+
+
+def test_every_entry_point_refuses_a_nan_vertex_up_front(knot):
+    vertices = knot[0].copy()
+    vertices[7, 1] = np.nan
+    calls = {
+        "inspect": lambda: vp.inspect(vertices, knot[1], source="k"),
+        "build": lambda: vp.build(vertices, knot[1], ["aabb"], source="k"),
+        "verify": lambda: vp.verify(vertices, knot[1], [], source="k"),
+        "measure": lambda: vp.measure(vertices, knot[1], [], source="k"),
+    }
+    for name, call in calls.items():
+        with pytest.raises(vp.InvalidInputError) as raised:
+            call()
+        assert str(raised.value) == "k: vertex 7: y is not finite (nan)", name
+
+
+def test_arguments_of_the_wrong_type_raise_a_short_type_error(knot):
+    # A list of vertices (not an array) with a wrong argument beside it: the message names
+    # the signatures and the types given, never the values (they printed in full, 190 KB).
+    vertices = knot[0].tolist()
+    for call in (lambda: vp.build(vertices, knot[1], 5), lambda: vp.measure(vertices, knot[1], [], rays="many"),
+                 lambda: vp.inspect(vertices, knot[1], source=3)):
+        with pytest.raises(TypeError) as raised:
+            call()
+        message = str(raised.value)
+        assert len(message) < 2000, message[:300]
+        assert "incompatible function arguments" in message and "Invoked with types: (list, ndarray" in message
+    assert vp.build.__name__ == "build" and "vertices" in vp.build.__doc__
 
 
 def test_bad_proxy_dicts_and_options_raise(knot):

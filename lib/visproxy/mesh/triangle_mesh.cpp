@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -15,15 +16,24 @@ namespace visproxy {
 
 std::optional<std::size_t> first_vertex_out_of_range(const TriangleMesh& mesh) {
   for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-    if (!(mesh.positions[i].cwiseAbs().maxCoeff() <= kMaxCoordinate)) return i;  // NaN fails too
+    if (!within_coordinate_range(mesh.positions[i])) return i;
   return std::nullopt;
 }
 
 void require_coordinates_in_range(const TriangleMesh& mesh, const std::filesystem::path& file) {
   const std::optional<std::size_t> vertex = first_vertex_out_of_range(mesh);
   if (!vertex) return;
+  const Vertex& p = mesh.positions[*vertex];
+  for (int axis = 0; axis < 3; ++axis) {
+    const char name = "xyz"[axis];
+    if (!std::isfinite(p[axis]))
+      throw InvalidInputError(file, "vertex " + std::to_string(*vertex) + ": " + name + " is not finite (" +
+                                        (std::isnan(p[axis]) ? "nan" : p[axis] > 0 ? "inf" : "-inf") + ")");
+  }
   char text[64];
-  std::snprintf(text, sizeof text, "%.9g", mesh.positions[*vertex].cwiseAbs().maxCoeff());
+  double magnitude = 0;
+  for (int axis = 0; axis < 3; ++axis) magnitude = std::max(magnitude, std::abs(p[axis]));
+  std::snprintf(text, sizeof text, "%.9g", magnitude);
   throw InvalidInputError(file, "vertex " + std::to_string(*vertex) + " has a coordinate of magnitude " + text +
                                     ", beyond the 1e100 that geometry in double precision can square and cube");
 }

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -47,6 +48,12 @@ struct BoundingBox {
 /// and cubes coordinate differences (distances, normals, volumes); beyond 1e100 those
 /// would overflow, so such meshes are refused where they are read.
 inline constexpr double kMaxCoordinate = 1e100;
+
+/// Whether every coordinate of `p` is finite and of magnitude at most kMaxCoordinate (each
+/// tested on its own: Eigen's maxCoeff may step over a NaN).
+inline bool within_coordinate_range(const Vertex& p) {
+  return std::abs(p.x()) <= kMaxCoordinate && std::abs(p.y()) <= kMaxCoordinate && std::abs(p.z()) <= kMaxCoordinate;
+}
 
 /// The first vertex (lowest index) with a coordinate of magnitude above kMaxCoordinate
 /// or not finite, if any.

@@ -121,7 +121,7 @@ ImportedScene import_scene(const std::filesystem::path& path) {
       if (part.mesh < 0) continue;
       const SceneMesh& mesh = result.meshes[static_cast<std::size_t>(part.mesh)];
       for (const Vertex& p : mesh.mesh.positions)
-        if (!((transform * p).cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        if (!within_coordinate_range(transform * p))
           throw InvalidInputError(path, "node '" + std::string(node->mName.C_Str()) + "' places its mesh beyond 1e100 in magnitude");
       if (part.emission.maxCoeff() > 0) {
         AreaLight light{.triangles = {}, .radiance = part.emission, .two_sided = part.two_sided};

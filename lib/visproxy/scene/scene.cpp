@@ -86,7 +86,7 @@ class Parser : public JsonInput {
     if (!triangles.is_array() || triangles.empty()) fail(triangles_path, "expected a non-empty array of triangles");
     for (std::size_t v = 0; v < positions.size(); ++v) {
       mesh.positions.push_back(vector3(positions[v], json_index_path(positions_path, v)));
-      if (!(mesh.positions.back().cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      if (!within_coordinate_range(mesh.positions.back()))
         fail(json_index_path(positions_path, v), "a coordinate beyond 1e100 in magnitude, which geometry in double precision cannot square and cube");
     }
     for (std::size_t t = 0; t < triangles.size(); ++t) {
@@ -260,7 +260,7 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& path, co
       for (int corner = 0; corner < 8 && !box.empty(); ++corner) {
         const Vertex placed = instance.transform * Vertex(corner & 1 ? box.max.x() : box.min.x(), corner & 2 ? box.max.y() : box.min.y(),
                                                           corner & 4 ? box.max.z() : box.min.z());
-        if (!(placed.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        if (!within_coordinate_range(placed))
           p.fail(json_member_path(where, "transform"), "places the mesh beyond 1e100 in magnitude, which geometry in double precision cannot square and cube");
       }
     }

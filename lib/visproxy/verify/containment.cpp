@@ -381,7 +381,7 @@ std::vector<PointLocation> locate_points(const TriangleMesh& container, std::spa
   if (container.triangles.empty() || points.empty()) return locations;
   require_in_range(container, "container");
   for (std::size_t i = 0; i < points.size(); ++i)
-    if (!(points[i].cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    if (!within_coordinate_range(points[i]))
       throw InvalidInputError("", "point " + std::to_string(i) + " to locate is not finite or beyond 1e100 in magnitude");
   const BoundingBox box = bounding_box(container);
   const double reach = 4.0 * box.diagonal() + 1.0;
