@@ -4,9 +4,12 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/mesh/sphere_set.h"
+#include "visproxy/proxy/proxy_spec.h"
 #include "test_support.h"
 
 namespace visproxy {
@@ -110,6 +113,55 @@ TEST_F(ReadManifest, ReadsFolderSlashManifestJson) {
   write_manifest(folder_, manifest());
   EXPECT_EQ(read_manifest(folder_), manifest());
   EXPECT_THROW(read_manifest(folder_ / "missing"), IOError);
+}
+
+// Built again into the same folder with fewer proxies: the ones no longer listed go, every
+// other file stays, and a hand-edited manifest cannot make it remove anything outside.
+class RebuiltFolder : public testing::ScratchFolder {
+ protected:
+  json build(const std::vector<std::string>& specs) {
+    const TriangleMesh mesh = sphere_set_mesh({Sphere{Vertex(0.5, 0.25, 0), 1.0}}, 1);
+    BuildOptions options;
+    options.hausdorff_samples = 200;
+    options.gssa_lines = 1000;
+    return build_proxy_folder(folder_ / "proxies", mesh, "ball.ply", Weld::automatic, parse_proxy_specs(specs), options)
+        .manifest;
+  }
+  bool has(const char* name) const { return std::filesystem::exists(folder_ / "proxies" / name); }
+};
+
+TEST_F(RebuiltFolder, RemovesTheProxiesItNoLongerListsAndNothingElse) {
+  build({"aabb", "hull", "spheres:4"});
+  ASSERT_TRUE(has("hull.ply") && has("hull.obj") && has("spheres-4.json") && has("spheres-4.ply"));
+  write_file_atomically(folder_ / "proxies" / "notes.txt", "mine\n");
+  const json manifest = build({"aabb"});
+  EXPECT_EQ(manifest["proxies"].size(), 1u);
+  EXPECT_TRUE(has("aabb.ply") && has("aabb.obj") && has("manifest.json") && has("notes.txt"));
+  EXPECT_FALSE(has("hull.ply") || has("hull.obj") || has("spheres-4.json") || has("spheres-4.ply"));
+}
+
+TEST_F(RebuiltFolder, AHandEditedManifestCannotRemoveFilesOutsideTheFolder) {
+  build({"aabb"});
+  write_file_atomically(folder_ / "victim.txt", "keep\n");
+  std::filesystem::create_directories(folder_ / "proxies" / "sub");
+  write_file_atomically(folder_ / "proxies" / "sub" / "inner.txt", "keep\n");
+  json edited = read_manifest(folder_ / "proxies");
+  edited["proxies"][0]["files"] = json::array({"../victim.txt", (folder_ / "victim.txt").string(), "sub/inner.txt", "sub",
+                                               ".", "..", "manifest.json", "aabb.ply"});
+  write_manifest(folder_ / "proxies", edited);
+  build({"hull"});
+  EXPECT_TRUE(std::filesystem::exists(folder_ / "victim.txt"));
+  EXPECT_TRUE(has("sub/inner.txt") && has("manifest.json") && has("hull.ply"));
+  EXPECT_FALSE(has("aabb.ply"));  // a plain name it listed
+  EXPECT_TRUE(has("aabb.obj"));   // no longer listed by the edited manifest: not known to be ours
+}
+
+TEST_F(RebuiltFolder, AnUnreadableManifestRemovesNothing) {
+  build({"aabb"});
+  write_file_atomically(folder_ / "proxies" / "manifest.json", "{ not json");
+  build({"hull"});
+  EXPECT_TRUE(has("aabb.ply") && has("aabb.obj") && has("hull.ply"));
+  EXPECT_EQ(read_manifest(folder_ / "proxies")["proxies"][0]["name"], "hull");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "visproxy/folder/proxy_folder.h"
 
 #include <optional>
+#include <set>
 #include <system_error>
 
 #include "visproxy/core/errors.h"
@@ -200,11 +201,48 @@ json manifest_entry(const BuiltProxy& proxy) {
           {"result", proxy.result}};
 }
 
+namespace {
+
+// The files the folder's present manifest lists (each entry's `file` and `files`), as plain
+// names inside the folder: a name with a path in it (hand-edited, "../x") is not ours to
+// remove and is left out. Nothing when there is no readable manifest.
+std::set<std::string> listed_files(const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(folder / "manifest.json", error)) return names;
+  json manifest;
+  try {
+    manifest = read_manifest(folder);
+  } catch (const Error&) {
+    return names;
+  }
+  const auto add = [&names](const json& name) {
+    if (!name.is_string()) return;
+    const std::string text = name.get<std::string>();
+    const std::filesystem::path path(text);
+    if (text.empty() || text == "." || text == ".." || text == "manifest.json" || path.has_parent_path() ||
+        path.filename().string() != text || text.find('\\') != std::string::npos)
+      return;
+    names.insert(text);
+  };
+  for (const json& entry : manifest.at("proxies")) {
+    if (entry.contains("file")) add(entry["file"]);
+    if (entry.contains("files") && entry["files"].is_array())
+      for (const json& name : entry["files"]) add(name);
+  }
+  return names;
+}
+
+}  // namespace
+
 json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh& mesh,
                         std::span<const BuiltProxy> proxies, const BuildOptions& options) {
   std::error_code error;
   std::filesystem::create_directories(folder, error);
   if (error) throw IOError(folder, "cannot create the output folder: " + error.message());
+  // Built again into a folder: the proxies the new manifest no longer lists go, once it is
+  // in place (files of other names are left alone).
+  std::set<std::string> stale = listed_files(folder);
 
   json entries = json::array();
   for (const BuiltProxy& proxy : proxies) {
@@ -244,6 +282,9 @@ json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh&
         {"seed", options.seed}}},
       {"proxies", entries}};
   write_file_atomically(folder / "manifest.json", manifest.dump(2) + "\n");
+  for (const json& entry : manifest.at("proxies"))
+    for (const json& name : entry.at("files")) stale.erase(name.get<std::string>());
+  for (const std::string& name : stale) std::filesystem::remove(folder / name, error);
   return manifest;
 }
 

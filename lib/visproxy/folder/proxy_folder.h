@@ -38,7 +38,10 @@ nlohmann::json manifest_entry(const BuiltProxy& proxy);
 /// Writes NAME.ply (binary) and NAME.obj for every proxy into `folder` (created if
 /// missing) - for sphere proxies NAME.json (the sphere set, the entry's `file`) and NAME.ply
 /// (their icospheres, for viewing) - then `folder`/manifest.json; every file is written under a temporary name
-/// and renamed, so a failure never leaves a partial file. Returns the manifest.
+/// and renamed, so a failure never leaves a partial file. Built again into a folder, the
+/// files of the proxies the old manifest listed and the new one does not are removed once
+/// the new manifest is in place (only plain names inside the folder; other files stay).
+/// Returns the manifest.
 nlohmann::json write_proxy_folder(const std::filesystem::path& folder, const ManifestMesh& mesh,
                                   std::span<const BuiltProxy> proxies, const BuildOptions& options);
 
