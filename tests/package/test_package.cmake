@@ -78,14 +78,16 @@ if(code EQUAL 0)
   message(FATAL_ERROR "find_package(visproxy ${major}.${next_minor}) accepted version ${VERSION}")
 endif()
 
-# 6. pkg-config: the same program compiled with `pkg-config --cflags --libs visproxy`.
+# 6. pkg-config: the same program compiled with `pkg-config --cflags --libs visproxy` alone,
+#    and run without LD_LIBRARY_PATH (the flags carry the library's run path).
 find_program(PKG_CONFIG pkg-config REQUIRED)
 set(ENV{PKG_CONFIG_PATH} "${prefix}/lib/pkgconfig")
 run("pkg-config" ${PKG_CONFIG} --cflags --libs visproxy)
 string(STRIP "${output}" flags)
 separate_arguments(flags UNIX_COMMAND "${flags}")
+unset(ENV{LD_LIBRARY_PATH})
 run("compiling with pkg-config's flags" ${CXX} -O1 "${SOURCE_DIR}/tests/package/consumer/main.cpp" ${flags}
-    "-Wl,-rpath,${prefix}/lib" -o "${WORK_DIR}/consumer-pc")
+    -o "${WORK_DIR}/consumer-pc")
 run("running the pkg-config build" "${WORK_DIR}/consumer-pc" "${MESH}")
 if(NOT output MATCHES "contains the mesh: proved")
   message(FATAL_ERROR "the pkg-config build printed: ${output}")
