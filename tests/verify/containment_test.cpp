@@ -3,7 +3,12 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <tbb/global_control.h>
 
 #include "visproxy/core/errors.h"
@@ -25,6 +30,42 @@ TriangleMesh merged(const TriangleMesh& a, const TriangleMesh& b) {
   mesh.positions.insert(mesh.positions.end(), b.positions.begin(), b.positions.end());
   for (Triangle t : b.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   return mesh;
+}
+
+// A torus of u x v quads, major radius 1, minor radius 0.35, outward, scaled and moved.
+TriangleMesh torus(int u, int v, double scale = 1, const Vertex& offset = Vertex::Zero()) {
+  TriangleMesh mesh;
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      const double a = 2 * std::numbers::pi * i / u, b = 2 * std::numbers::pi * j / v;
+      const double r = 1 + 0.35 * std::cos(b);
+      mesh.positions.push_back(scale * Vertex(r * std::cos(a), r * std::sin(a), 0.35 * std::sin(b)) + offset);
+    }
+  auto at = [&](int i, int j) { return static_cast<VertexIndex>((i % u) * v + (j % v)); };
+  for (int i = 0; i < u; ++i)
+    for (int j = 0; j < v; ++j) {
+      mesh.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      mesh.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return mesh;
+}
+
+// CGAL's exact convex hull of the mesh's vertices, as a triangle mesh with outward faces.
+TriangleMesh hull_of(const TriangleMesh& mesh) {
+  using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
+  std::vector<Point> points;
+  for (const Vertex& p : mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
+  CGAL::Surface_mesh<Point> hull;
+  CGAL::convex_hull_3(points.begin(), points.end(), hull);
+  TriangleMesh result;
+  for (const auto v : hull.vertices()) result.positions.emplace_back(hull.point(v).x(), hull.point(v).y(), hull.point(v).z());
+  for (const auto f : hull.faces()) {
+    Triangle t{};
+    std::size_t i = 0;
+    for (const auto v : hull.vertices_around_face(hull.halfedge(f))) t[i++] = static_cast<VertexIndex>(v.idx());
+    result.triangles.push_back(t);
+  }
+  return result;
 }
 
 TEST(LocatePoints, CubeInsideOnBoundaryOutside) {
@@ -330,6 +371,109 @@ TEST(CheckContainment, TenThousandConvexPartsEachHoldTheirComponent) {
   TriangleMesh grown = contents;
   for (VertexIndex v = 0; v < 4; ++v) grown.positions[v] *= 1.2;
   EXPECT_EQ(check_containment(boxes, grown).vertices_outside, 3u);
+}
+
+// The planes pass over whole boxes of points at once; a box passed on the wrong side would
+// hide a point beyond a plane. Points on the planes, one ulp off them either way, face
+// centroids rounded either way, vertices and inner points, on a hull of many faces near
+// the origin, far from it with small features, and at tiny scale: the marks must be those
+// of every plane tested against every point, one by one.
+TEST(BeyondFacePlanes, AgreesWithEveryPlaneTestedOneByOne) {
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  struct Case {
+    double scale;
+    Vertex offset;
+  };
+  for (const Case& c : {Case{1, Vertex::Zero()}, Case{1e-3, Vertex(1e8, -3e7, 2e6)}, Case{1e-200, Vertex(1e-199, 0, 0)}}) {
+    const TriangleMesh hull = hull_of(torus(40, 16, c.scale, c.offset));
+    ASSERT_GT(hull.triangles.size(), 300u);
+    std::vector<Vertex> points = torus(40, 16, c.scale, c.offset).positions;
+    Random random(7);
+    for (const Triangle& t : hull.triangles) {
+      const Vertex& a = hull.positions[t[0]];
+      const Vertex centroid = (a + hull.positions[t[1]] + hull.positions[t[2]]) / 3;
+      points.push_back(centroid);
+      for (int axis = 0; axis < 3; ++axis)
+        for (const double toward : {-1e300, 1e300}) {
+          Vertex nudged = a;
+          nudged[axis] = std::nextafter(nudged[axis], toward);
+          points.push_back(nudged);
+        }
+      points.push_back(c.offset + 0.9 * (centroid - c.offset) * random.uniform());
+    }
+    const std::vector<std::uint8_t> marks = beyond_face_planes(hull, points);
+    ASSERT_EQ(marks.size(), points.size());
+    std::size_t beyond = 0, behind = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const Kernel::Point_3 p(points[i].x(), points[i].y(), points[i].z());
+      bool expected = false;
+      for (const Triangle& t : hull.triangles) {
+        const Kernel::Point_3 a(hull.positions[t[0]].x(), hull.positions[t[0]].y(), hull.positions[t[0]].z());
+        const Kernel::Point_3 b(hull.positions[t[1]].x(), hull.positions[t[1]].y(), hull.positions[t[1]].z());
+        const Kernel::Point_3 d(hull.positions[t[2]].x(), hull.positions[t[2]].y(), hull.positions[t[2]].z());
+        if (!CGAL::collinear(a, b, d) && CGAL::orientation(a, b, d, p) == CGAL::POSITIVE) {
+          expected = true;
+          break;
+        }
+      }
+      ASSERT_EQ(marks[i] != 0, expected) << "point " << i << " at scale " << c.scale;
+      (expected ? beyond : behind) += 1;
+    }
+    // Both answers occur, many of them: the test can tell a wrong mark from a right one.
+    EXPECT_GT(beyond, hull.triangles.size());
+    EXPECT_GT(behind, hull.triangles.size());
+  }
+}
+
+// A convex hull of thousands of faces around a torus of 80 000 triangles that touches it
+// along whole rings: every touching triangle is proved in the one convex part. The same
+// hull with one vertex of its flat top cap raised by one ulp is no longer convex: the cap
+// triangles at that vertex tilt up about a diagonal, so the cap's far vertices lie beyond
+// their planes by far less than any box the planes pass over. The mesh's vertices are
+// still inside, but the triangles touching the hull are then unproved.
+TEST(CheckContainment, LargeConvexHullHoldsTheTorusItTouches) {
+  const TriangleMesh mesh = torus(400, 100);
+  TriangleMesh hull = hull_of(mesh);
+  ASSERT_GT(hull.triangles.size(), 20000u);
+  const Containment held = check_containment(hull, mesh);
+  EXPECT_TRUE(held.contained());
+  EXPECT_TRUE(held.convex_container);  // decided by the planes alone
+  EXPECT_GT(held.triangles_touching, 1000u);
+  EXPECT_EQ(held.triangles_in_convex_parts, held.triangles_touching);
+  // The triangles it counts as touching (a corner on the surface) are those that meet a
+  // hull triangle, exactly.
+  std::vector<std::uint32_t> meeting;
+  for (const auto& pair : find_crossing_triangles(hull, mesh)) meeting.push_back(pair.second);
+  std::sort(meeting.begin(), meeting.end());
+  EXPECT_EQ(held.triangles_touching, static_cast<std::size_t>(std::unique(meeting.begin(), meeting.end()) - meeting.begin()));
+  // One mesh vertex on the hull moved out by one ulp: found, named, and the proof fails.
+  TriangleMesh pushed = mesh;
+  VertexIndex outermost = 0;
+  for (VertexIndex v = 0; v < pushed.positions.size(); ++v)
+    if (pushed.positions[v].x() > pushed.positions[outermost].x()) outermost = v;
+  pushed.positions[outermost].x() = std::nextafter(pushed.positions[outermost].x(), 2.0);
+  const Containment out = check_containment(hull, pushed);
+  EXPECT_FALSE(out.contained());
+  EXPECT_FALSE(out.convex_container);
+  EXPECT_EQ(out.vertices_outside, 1u);
+  ASSERT_TRUE(out.first_vertex_outside.has_value());
+  EXPECT_EQ(*out.first_vertex_outside, outermost);
+  // The cap vertex (z at its highest) in the fewest cap triangles: not the centre of a fan.
+  double top = -1;
+  for (const Vertex& p : hull.positions) top = std::max(top, p.z());
+  std::vector<int> cap_triangles(hull.positions.size(), 0);
+  for (const Triangle& t : hull.triangles)
+    if (hull.positions[t[0]].z() == top && hull.positions[t[1]].z() == top && hull.positions[t[2]].z() == top)
+      for (const VertexIndex v : t) ++cap_triangles[v];
+  std::size_t raised = hull.positions.size();
+  for (std::size_t v = 0; v < hull.positions.size(); ++v)
+    if (cap_triangles[v] > 0 && (raised == hull.positions.size() || cap_triangles[v] < cap_triangles[raised])) raised = v;
+  ASSERT_LT(raised, hull.positions.size());
+  hull.positions[raised].z() = std::nextafter(top, 1.0);
+  const Containment bent = check_containment(hull, mesh);
+  EXPECT_EQ(bent.vertices_outside, 0u);
+  EXPECT_GT(bent.triangles_unproved, 0u);
+  EXPECT_FALSE(bent.contained());
 }
 
 TEST(LocatePoints, CoordinatesTooLargeToSquareAreRefused) {

@@ -32,7 +32,8 @@ json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& c
                   {{"vertices", containment.vertices_checked},
                    {"vertices_on_surface", containment.vertices_on_boundary},
                    {"triangles_touching", containment.triangles_touching},
-                   {"triangles_in_convex_parts", containment.triangles_in_convex_parts}}}};
+                   {"triangles_in_convex_parts", containment.triangles_in_convex_parts},
+                   {"convex_container", containment.convex_container}}}};
   result["holds"] = containment.contained();
   auto open_edge = [](const EdgeBalance& edges) {
     return "edge " + std::to_string(edges.first_low) + "-" + std::to_string(edges.first_high) + " is used " +
@@ -65,6 +66,8 @@ json check_mesh_containment(const TriangleMesh& container, const TriangleMesh& c
                      " " + point_text(container.positions[*containment.first_container_vertex_inside]) +
                      " lies inside the " + contents_name + ", so the " + contents_name + "'s solid holds part of the " +
                      container_name + "'s surface";
+  } else if (containment.vertices_on_boundary > 0) {
+    result["margin"] = 0.0;  // a contents vertex lies exactly on the container's surface
   } else {
     result["margin"] = closest_distance_to_surface(container, used_positions(contents)).distance;
   }

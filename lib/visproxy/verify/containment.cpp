@@ -5,6 +5,8 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/FPU.h>
+#include <CGAL/Interval_nt.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
 #include <CGAL/convex_hull_3.h>
@@ -14,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <cmath>
@@ -117,28 +120,168 @@ std::optional<int> winding_along(const Tree& tree, const Point& p, const Point& 
   return winding;
 }
 
+// Which points lie beyond (on the outer side of) some triangle's plane, decided exactly:
+// CGAL's positive side of the oriented plane. A convex polytope of m faces and n points
+// would cost n * m orientation tests one by one; instead the points sit in a tree of boxes
+// and each plane passes over the boxes wholly behind it (or wholly beyond it) at once, by
+// the plane's orientation determinant evaluated in interval arithmetic over the box: an
+// enclosure of the determinant at every point of the box, so that a box is passed only
+// when the sign at each of its points is proved. Only the points of boxes the plane cuts
+// meet the exact predicate. For a tight convex proxy that is about log n boxes and a few
+// points per face.
+class PlaneScan {
+ public:
+  PlaneScan(const Triangles& planes, const std::vector<Point>& points) : planes_(planes), points_(points) {
+    if (brute_force()) return;
+    order_.resize(points.size());
+    std::iota(order_.begin(), order_.end(), std::uint32_t{0});
+    nodes_.reserve(2 * points.size() / kLeaf + 2);
+    build(0, static_cast<std::uint32_t>(points.size()));
+  }
+
+  /// Whether some point is strictly behind some plane (CGAL's negative side).
+  bool strictly_behind_one() const { return strictly_; }
+
+  /// Whether every point is behind or on every plane; stops at the first point beyond.
+  bool none_beyond() {
+    std::atomic<bool> beyond{false};
+    run(
+        [&](std::uint32_t, std::uint8_t mark) {
+          if (mark == kBeyond) beyond.store(true, std::memory_order_relaxed);
+        },
+        &beyond);
+    return !beyond;
+  }
+
+  static constexpr std::uint8_t kBeyond = 1, kOn = 2;
+  /// For each point, kBeyond when it lies beyond at least one plane, kOn when it lies on
+  /// at least one (both may be set).
+  std::vector<std::uint8_t> classify() {
+    const std::unique_ptr<std::atomic<std::uint8_t>[]> marks(new std::atomic<std::uint8_t>[points_.size()]);
+    for (std::size_t i = 0; i < points_.size(); ++i) marks[i] = 0;
+    run([&](std::uint32_t point, std::uint8_t mark) { marks[point].fetch_or(mark, std::memory_order_relaxed); }, nullptr);
+    std::vector<std::uint8_t> result(points_.size());
+    for (std::size_t i = 0; i < points_.size(); ++i) result[i] = marks[i];
+    return result;
+  }
+
+  /// For each point, whether it lies beyond at least one plane.
+  std::vector<std::uint8_t> beyond_some_plane() {
+    std::vector<std::uint8_t> marks = classify();
+    for (std::uint8_t& mark : marks) mark &= kBeyond;
+    return marks;
+  }
+
+ private:
+  static constexpr std::uint32_t kLeaf = 8;
+  struct Node {
+    std::array<double, 3> low, high;
+    std::uint32_t begin, end;  ///< range of order_
+    std::uint32_t second = 0;  ///< index of the second child (the first follows the node); 0 for a leaf
+  };
+
+  bool brute_force() const { return planes_.size() * points_.size() <= 4096; }
+
+  std::uint32_t build(std::uint32_t begin, std::uint32_t end) {
+    const auto index = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.push_back({});
+    Node node;
+    node.begin = begin, node.end = end;
+    node.low.fill(std::numeric_limits<double>::infinity());
+    node.high.fill(-std::numeric_limits<double>::infinity());
+    for (std::uint32_t i = begin; i < end; ++i)
+      for (int axis = 0; axis < 3; ++axis) {
+        node.low[axis] = std::min(node.low[axis], points_[order_[i]][axis]);
+        node.high[axis] = std::max(node.high[axis], points_[order_[i]][axis]);
+      }
+    if (end - begin > kLeaf) {
+      int axis = 0;
+      for (int a = 1; a < 3; ++a)
+        if (node.high[a] - node.low[a] > node.high[axis] - node.low[axis]) axis = a;
+      const std::uint32_t middle = begin + (end - begin) / 2;
+      std::nth_element(order_.begin() + begin, order_.begin() + middle, order_.begin() + end,
+                       [&](std::uint32_t a, std::uint32_t b) { return points_[a][axis] < points_[b][axis]; });
+      build(begin, middle);
+      node.second = build(middle, end);
+    }
+    nodes_[index] = node;
+    return index;
+  }
+
+  // Calls found(point, kBeyond) for every point beyond some plane and found(point, kOn)
+  // for every point on one (possibly more than once, from several threads); stops early
+  // once *stop is set.
+  template <class Found>
+  void run(const Found& found, const std::atomic<bool>* stop) {
+    std::atomic<bool> strictly{false};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes_.size(), brute_force() ? std::max<std::size_t>(planes_.size(), 1) : 64),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+      bool local_strictly = false;
+      std::vector<std::uint32_t> stack;
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> cut;  // ranges of order_ to test exactly
+      for (std::size_t f = range.begin(); f != range.end(); ++f) {
+        if (stop && stop->load(std::memory_order_relaxed)) return;
+        const CgalTriangle& t = planes_[f];
+        auto exact = [&](std::uint32_t point) {
+          const CGAL::Orientation side = CGAL::orientation(t[0], t[1], t[2], points_[point]);
+          if (side == CGAL::POSITIVE) found(point, kBeyond);
+          else if (side == CGAL::ZERO) found(point, kOn);
+          local_strictly = local_strictly || side == CGAL::NEGATIVE;
+        };
+        if (brute_force()) {
+          for (std::uint32_t p = 0; p < points_.size(); ++p) exact(p);
+          continue;
+        }
+        cut.clear();
+        {
+          using I = CGAL::Interval_nt<false>;
+          const CGAL::Protect_FPU_rounding<true> upward;
+          const I ox(t[0].x()), oy(t[0].y()), oz(t[0].z());
+          const I ax = I(t[1].x()) - ox, ay = I(t[1].y()) - oy, az = I(t[1].z()) - oz;
+          const I bx = I(t[2].x()) - ox, by = I(t[2].y()) - oy, bz = I(t[2].z()) - oz;
+          const I nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+          stack.assign(1, 0);
+          while (!stack.empty()) {
+            const Node& node = nodes_[stack.back()];
+            const std::uint32_t at = stack.back();
+            stack.pop_back();
+            const I determinant = nx * (I(node.low[0], node.high[0]) - ox) + ny * (I(node.low[1], node.high[1]) - oy) +
+                                  nz * (I(node.low[2], node.high[2]) - oz);
+            if (determinant.sup() < 0) {
+              local_strictly = true;  // the whole box strictly behind
+            } else if (determinant.inf() > 0) {
+              for (std::uint32_t i = node.begin; i < node.end; ++i) cut.emplace_back(i, i + 1);  // all beyond; reported below
+            } else if (node.second == 0) {
+              cut.emplace_back(node.begin, node.end);
+            } else {
+              stack.push_back(node.second);
+              stack.push_back(at + 1);
+            }
+          }
+        }
+        for (const auto& [begin, end] : cut)
+          for (std::uint32_t i = begin; i < end; ++i) exact(order_[i]);
+      }
+      if (local_strictly) strictly.store(true, std::memory_order_relaxed);
+    });
+    strictly_ = strictly;
+  }
+
+  const Triangles& planes_;
+  const std::vector<Point>& points_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Node> nodes_;
+  bool strictly_ = false;
+};
+
 // Whether every point lies behind or on the plane of every triangle (its inner side:
 // CGAL's negative side of the oriented plane), exactly; `strictly_behind_one` tells
-// whether some point lies strictly behind some plane. Planes in parallel.
+// whether some point lies strictly behind some plane (only meaningful when true is returned).
 bool behind_or_on_every_plane(const Triangles& planes, const std::vector<Point>& points, bool* strictly_behind_one = nullptr) {
-  std::atomic<bool> outside{false}, strictly{false};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, planes.size(), 16), [&](const tbb::blocked_range<std::size_t>& range) {
-    bool local_strictly = false;
-    for (std::size_t f = range.begin(); f != range.end() && !outside.load(std::memory_order_relaxed); ++f) {
-      const CgalTriangle& t = planes[f];
-      for (const Point& p : points) {
-        const CGAL::Orientation side = CGAL::orientation(t[0], t[1], t[2], p);
-        if (side == CGAL::POSITIVE) {
-          outside = true;
-          break;
-        }
-        local_strictly = local_strictly || side == CGAL::NEGATIVE;
-      }
-    }
-    if (local_strictly) strictly = true;
-  });
-  if (strictly_behind_one) *strictly_behind_one = strictly;
-  return !outside;
+  PlaneScan scan(planes, points);
+  const bool held = scan.none_beyond();
+  if (strictly_behind_one) *strictly_behind_one = scan.strictly_behind_one();
+  return held;
 }
 
 // The points that can be farthest out along any direction: the vertices of their convex
@@ -187,6 +330,12 @@ class ConvexParts {
   /// Whether the part is convex and holds every point behind or on its planes.
   bool holds(std::size_t index, const std::vector<Point>& points) {
     return convex(index) && behind_or_on_every_plane(parts_[index].planes, points);
+  }
+  /// The part's non-degenerate triangles (filled by convex()).
+  const Triangles& planes(std::size_t index) const { return parts_[index].planes; }
+  /// For each point, whether it lies beyond some plane of the part (which must be convex).
+  std::vector<std::uint8_t> beyond(std::size_t index, const std::vector<Point>& points) {
+    return PlaneScan(parts_[index].planes, points).beyond_some_plane();
   }
 
  private:
@@ -240,20 +389,32 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> outside_convex_parts(
     else
       left.insert(left.end(), by_part[part].begin(), by_part[part].end());
   }
+  // The triangles left, each against every convex part whose box holds it: for each part,
+  // the corners of all its candidates in one scan of its planes.
   std::sort(left.begin(), left.end());
+  std::vector<BoundingBox> boxes(left.size());
+  for (std::size_t k = 0; k < left.size(); ++k)
+    for (const VertexIndex v : contents.triangles[left[k]]) boxes[k].extend(contents.positions[v]);
+  std::vector<std::uint8_t> held(left.size(), 0);
+  for (std::size_t part = 0; part < parts.count(); ++part) {
+    std::vector<std::size_t> candidates;
+    for (std::size_t k = 0; k < left.size(); ++k)
+      if (!held[k] && box_holds(parts.box(part), boxes[k])) candidates.push_back(k);
+    if (candidates.empty() || !parts.convex(part)) continue;
+    std::vector<Point> points;
+    for (const std::size_t k : candidates)
+      for (const Point& p : corners(left[k])) points.push_back(p);
+    const std::vector<std::uint8_t> beyond = parts.beyond(part, points);
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+      held[candidates[c]] = !beyond[3 * c] && !beyond[3 * c + 1] && !beyond[3 * c + 2];
+  }
   std::vector<std::pair<std::uint32_t, std::uint32_t>> unproved;
-  for (const std::uint32_t t : left) {
-    BoundingBox box;
-    for (const VertexIndex v : contents.triangles[t]) box.extend(contents.positions[v]);
-    bool held = false;
-    const std::vector<Point> points = corners(t);
-    for (std::size_t part = 0; part < parts.count() && !held; ++part)
-      held = box_holds(parts.box(part), box) && parts.holds(part, points);
-    if (held) {
+  for (std::size_t k = 0; k < left.size(); ++k) {
+    if (held[k]) {
       ++proved;
     } else {
-      const auto it = std::lower_bound(first.begin(), first.end(), std::pair<std::uint32_t, std::uint32_t>(t, 0));
-      unproved.emplace_back(it->second, t);
+      const auto it = std::lower_bound(first.begin(), first.end(), std::pair<std::uint32_t, std::uint32_t>(left[k], 0));
+      unproved.emplace_back(it->second, left[k]);
     }
   }
   std::sort(unproved.begin(), unproved.end());
@@ -435,6 +596,21 @@ std::vector<PointLocation> locate_points(const TriangleMesh& container, std::spa
   return locations;
 }
 
+std::vector<std::uint8_t> beyond_face_planes(const TriangleMesh& mesh, std::span<const Vertex> points) {
+  require_in_range(mesh, "plane");
+  std::vector<Point> located;
+  located.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!within_coordinate_range(points[i]))
+      throw InvalidInputError("", "point " + std::to_string(i) + " to test is not finite or beyond 1e100 in magnitude");
+    located.push_back(to_point(points[i]));
+  }
+  Triangles planes;
+  for (const CgalTriangle& t : triangles_of(mesh))
+    if (!t.is_degenerate()) planes.push_back(t);
+  return PlaneScan(planes, located).beyond_some_plane();
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> find_crossing_triangles(const TriangleMesh& container,
                                                                               const TriangleMesh& contents) {
   const Triangles a = triangles_of(container);
@@ -475,6 +651,38 @@ Containment check_containment(const TriangleMesh& container, const TriangleMesh&
       point_vertex.push_back(static_cast<VertexIndex>(v));
     }
   result.vertices_checked = points.size();
+
+  // A container of one closed convex part (convexity tested): its solid is the
+  // intersection of its faces' inner half-spaces (ConvexParts), so a point is located by
+  // its side of every face plane, and a contents triangle whose corners are all in it lies
+  // in it; a triangle meets the surface exactly when a corner lies on it. One scan of the
+  // planes over the points, no ray and no pair of triangles.
+  if (!options.contents_solid) {
+    const Triangles container_triangles = triangles_of(container);
+    ConvexParts parts(container, container_triangles);
+    if (parts.count() == 1 && parts.convex(0)) {
+      std::vector<Point> located;
+      located.reserve(points.size());
+      for (const Vertex& p : points) located.push_back(to_point(p));
+      const std::vector<std::uint8_t> marks = PlaneScan(parts.planes(0), located).classify();
+      const bool all_held = std::none_of(marks.begin(), marks.end(), [](std::uint8_t m) { return m & PlaneScan::kBeyond; });
+      // A vertex outside: the general path below finds it again, with the triangles that
+      // cross the surface and a pair to show (a failed proof may take longer).
+      if (all_held) {
+        result.convex_container = true;
+        std::vector<std::uint8_t> on_surface(contents.positions.size(), 0);
+        for (std::size_t i = 0; i < marks.size(); ++i)
+          if (marks[i] & PlaneScan::kOn) ++result.vertices_on_boundary, on_surface[point_vertex[i]] = 1;
+        if (!options.check_surface) return result;
+        result.surface_checked = true;
+        for (const Triangle& t : contents.triangles)
+          if (on_surface[t[0]] || on_surface[t[1]] || on_surface[t[2]]) ++result.triangles_touching;
+        result.triangles_in_convex_parts = result.triangles_touching;
+        return result;
+      }
+    }
+  }
+
   const std::vector<PointLocation> locations = locate_points(container, points);
   for (std::size_t i = 0; i < locations.size(); ++i) {
     if (locations[i] == PointLocation::outside && result.vertices_outside++ == 0) result.first_vertex_outside = point_vertex[i];
