@@ -114,7 +114,7 @@ void run(const std::filesystem::path& path, const Settings& settings) {
   if (settings.lines == 0) return;
   const RayScene mesh_scene(mesh);
   const ReferenceRays reference =
-      trace_reference(mesh_scene, isotropic_lines(bounding_sphere(mesh), settings.lines, 1), {.rays = 0, .repeats = 0});
+      trace_reference(mesh_scene, isotropic_lines(bounding_sphere(mesh), settings.lines, 1), {.rays = 0, .blocks = 0});
   print_ratio("initial", reference, set.spheres, ProxyKind::general);
   for (std::size_t k = 0; k < levels.size(); ++k)
     print_ratio(("spheres-" + std::to_string(settings.levels[k])).c_str(), reference, levels[k], ProxyKind::general);

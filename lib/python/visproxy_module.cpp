@@ -401,7 +401,7 @@ py::list measure_arrays(py::handle vertices, py::handle triangles, py::handle pr
   json manifest = {{"proxies", json::array()}};
   for (const HeldProxy& proxy : held) manifest["proxies"].push_back(proxy.entry);
   MeasureOptions options{.rays = rays, .seed = seed, .scene = scene.value_or(std::filesystem::path()),
-                         .timing = {.rays = timed_rays, .repeats = 3}, .on_start = {}, .on_warning = {}};
+                         .timing = {.rays = timed_rays, .blocks = 6}, .on_start = {}, .on_warning = {}};
   {
     py::gil_scoped_release release;
     manifest = measure_proxies(
@@ -557,7 +557,7 @@ PYBIND11_MODULE(visproxy, m) {
         "a list of them; only kind and geometry are read. Returns one verify dict per proxy: claim, holds, margin, "
         "counterexample, ...");
   m.def("measure", &measure_arrays, "vertices"_a, "triangles"_a, "proxies"_a, py::kw_only(), "rays"_a = 1000000,
-        "seed"_a = 1, "scene"_a = py::none(), "timed_rays"_a = 200000, "source"_a = "mesh arrays",
+        "seed"_a = 1, "scene"_a = py::none(), "timed_rays"_a = 100000, "source"_a = "mesh arrays",
         "Traces every proxy with the same seeded isotropic lines as the mesh (or a scene's shadow segments, `scene`), as "
         "'visproxy measure' does. Returns one measure dict per proxy: counts, f_hit, f_miss, v_avg, gssa_ratio (value, "
         "lower, upper at 95 %), optimal probabilities, variance, cost_ns_per_ray.");

@@ -31,7 +31,7 @@ TEST(MeasureProxies, AnOutsideProxyBeyondTheBoundingSphereIsTracedOnTheWholeLine
   json manifest = {{"proxies", {{{"name", "huge"}, {"kind", "outside"}}, {{"name", "same"}, {"kind", "outside"}}}}};
   const json measured = measure_proxies(
       mesh, manifest, [&](const json&, std::size_t index) { return index == 0 ? huge : same; },
-      {.rays = 40000, .seed = 5, .scene = {}, .timing = {.rays = 100, .repeats = 1}, .on_start = {}, .on_warning = {}});
+      {.rays = 40000, .seed = 5, .scene = {}, .timing = {.rays = 100, .blocks = 1}, .on_start = {}, .on_warning = {}});
   const json& big = measured["proxies"][0]["measure"];
   EXPECT_EQ(big["rays_contradicting_claim"], 0);
   EXPECT_EQ(big["f_hit"]["value"], 1.0);

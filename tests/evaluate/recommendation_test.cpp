@@ -28,6 +28,14 @@ json entry(const std::string& name, const std::string& kind, std::array<std::uin
         {"cost_ns_per_ray", {{"proxy", proxy_ns}, {"mesh", mesh_ns}}}}}};
 }
 
+// An entry whose cost was timed in blocks: proxy / mesh over the blocks from `low` to `high`.
+json timed_entry(const std::string& name, std::array<std::uint64_t, 4> counts, double proxy_ns, double mesh_ns, double low,
+                 double high, double primitives) {
+  json e = entry(name, "outside", counts, proxy_ns, mesh_ns, primitives);
+  e["measure"]["cost_ns_per_ray"]["proxy_over_mesh_range"] = {low, high};
+  return e;
+}
+
 json manifest_of(json proxies) { return {{"mesh", {{"path", "mesh.off"}}}, {"proxies", std::move(proxies)}}; }
 
 ProvedKind as_claimed() {
@@ -137,6 +145,67 @@ TEST(Recommendation, AnIntervalHoldingOneClaimsNoGain) {
   EXPECT_NE(r.choices[index_of(ProxyUse::bounds)].sentence.find("as efficient as the mesh: the interval holds 1"),
             std::string::npos)
       << r.choices[index_of(ProxyUse::bounds)].sentence;
+  EXPECT_NE(r.choices[index_of(ProxyUse::bounds)].sentence.find("; trace the mesh"), std::string::npos)
+      << r.choices[index_of(ProxyUse::bounds)].sentence;
+}
+
+// The proxy's cost as timed in blocks beside the mesh: the interval takes in the blocks'
+// spread (its ends at the dearest and the cheapest block), still holds the prediction, and
+// is the sampling interval alone when the blocks agree.
+TEST(Recommendation, TheTimingSpreadWidensTheInterval) {
+  const std::array<std::uint64_t, 4> counts = {3000, 0, 400, 6600};
+  const Recommendation spread = recommend_proxies(manifest_of({timed_entry("a", counts, 20, 200, 0.05, 0.2, 12)}), as_claimed());
+  const Recommendation tight = recommend_proxies(manifest_of({timed_entry("a", counts, 20, 200, 0.1, 0.1, 12)}), as_claimed());
+  const Recommendation as_measured = recommend_proxies(manifest_of({entry("a", "outside", counts, 20, 200)}), as_claimed());
+  for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
+    const UseFigures &s = spread.proxies[0].uses[u], &t = tight.proxies[0].uses[u], &m = as_measured.proxies[0].uses[u];
+    EXPECT_DOUBLE_EQ(s.prediction.efficiency, t.prediction.efficiency);
+    EXPECT_LT(s.interval.lower, t.interval.lower * 0.9) << use_name(kProxyUses[u]);
+    EXPECT_GT(s.interval.upper, t.interval.upper * 1.1) << use_name(kProxyUses[u]);
+    EXPECT_LE(s.interval.lower, s.prediction.efficiency);
+    EXPECT_GE(s.interval.upper, s.prediction.efficiency);
+    EXPECT_DOUBLE_EQ(t.interval.lower, m.interval.lower);
+    EXPECT_DOUBLE_EQ(t.interval.upper, m.interval.upper);
+  }
+}
+
+// Two proxies whose intervals overlap: which one the timing noise puts ahead changes from
+// run to run, the recommendation does not. It goes to the one with fewer primitives, and
+// names the other; a proxy the intervals do separate still wins on efficiency.
+TEST(Recommendation, NoiseBetweenRunsDoesNotFlipTheChoice) {
+  const std::array<std::uint64_t, 4> counts = {3000, 0, 400, 6600};
+  for (const double big_ratio : {0.08, 0.1, 0.12}) {  // three runs: the big proxy's cost moved by noise
+    const json manifest = manifest_of({timed_entry("big", counts, big_ratio * 200, 200, big_ratio * 0.7, big_ratio * 1.4, 5000),
+                                       timed_entry("small", counts, 20, 200, 0.07, 0.14, 800)});
+    const Recommendation r = recommend_proxies(manifest, as_claimed());
+    for (const UseChoice& choice : r.choices) {
+      ASSERT_EQ(choice.best, 1) << "run with ratio " << big_ratio << ": " << choice.sentence;
+      EXPECT_NE(choice.sentence.find("big, at"), std::string::npos) << choice.sentence;
+      EXPECT_NE(choice.sentence.find("has more primitives"), std::string::npos) << choice.sentence;
+    }
+  }
+  // A smaller proxy not told apart from the best but not itself shown cheaper than the mesh
+  // is not chosen over it; when the best is not shown cheaper, it is the one named.
+  const std::array<std::uint64_t, 4> half = {3000, 0, 2000, 5000}, few = {3, 0, 2, 5};  // 10 rays: a wide interval
+  const json edge = manifest_of({timed_entry("big", half, 20, 200, 0.09, 0.11, 5000),
+                                 timed_entry("small", few, 60, 200, 0.25, 0.35, 10)});
+  const Recommendation edge_r = recommend_proxies(edge, as_claimed());
+  const UseFigures& big_bounds = edge_r.proxies[0].uses[index_of(ProxyUse::bounds)];
+  const UseFigures& small_bounds = edge_r.proxies[1].uses[index_of(ProxyUse::bounds)];
+  ASSERT_GT(big_bounds.interval.lower, 1.0);
+  ASSERT_GE(small_bounds.interval.upper, big_bounds.interval.lower);  // not told apart
+  ASSERT_LT(small_bounds.interval.lower, 1.0);                        // but not shown cheaper
+  const std::array<std::uint64_t, 4> even = {30, 0, 20, 50};
+  EXPECT_EQ(edge_r.choices[index_of(ProxyUse::bounds)].best, 0) << edge_r.choices[index_of(ProxyUse::bounds)].sentence;
+  const Recommendation alone = recommend_proxies(manifest_of({timed_entry("small", even, 50, 100, 0.45, 0.55, 10),
+                                                              timed_entry("tiny", even, 52, 100, 0.47, 0.57, 2)}),
+                                                 as_claimed());
+  EXPECT_EQ(alone.choices[index_of(ProxyUse::bounds)].best, 0) << alone.choices[index_of(ProxyUse::bounds)].sentence;
+  EXPECT_NE(alone.choices[index_of(ProxyUse::bounds)].sentence.find("trace the mesh"), std::string::npos);
+  // Separated: the big proxy at a third of the small one's cost with tight blocks.
+  const json manifest = manifest_of({timed_entry("big", counts, 6, 200, 0.029, 0.031, 5000),
+                                     timed_entry("small", counts, 60, 200, 0.29, 0.31, 800)});
+  for (const UseChoice& choice : recommend_proxies(manifest, as_claimed()).choices) EXPECT_EQ(choice.best, 0) << choice.sentence;
 }
 
 TEST(Recommendation, UntimedCostsMakeNoClaim) {

@@ -22,11 +22,11 @@ inline void expect_close_gssa(const TriangleMesh& mesh, const std::vector<Sphere
   const auto levels = merge_spheres(initial_spheres, targets);
   const RayScene mesh_scene(mesh);
   const ReferenceRays reference =
-      trace_reference(mesh_scene, isotropic_lines(bounding_sphere(mesh), 100000, 1), {.rays = 0, .repeats = 0});
+      trace_reference(mesh_scene, isotropic_lines(bounding_sphere(mesh), 100000, 1), {.rays = 0, .blocks = 0});
   for (std::size_t k = 0; k < targets.size(); ++k) {
     SCOPED_TRACE(targets[k]);
     ASSERT_EQ(levels[k].size(), targets[k]);
-    const ProxyMeasurement m = measure_proxy(reference, RayScene(levels[k]), ProxyKind::general, {.rays = 0, .repeats = 0});
+    const ProxyMeasurement m = measure_proxy(reference, RayScene(levels[k]), ProxyKind::general, {.rays = 0, .blocks = 0});
     EXPECT_GE(m.gssa_ratio_lower, 0.95) << m.gssa_ratio;
     EXPECT_LE(m.gssa_ratio_upper, 1.12) << m.gssa_ratio;
   }

@@ -178,8 +178,12 @@ UsePrediction predict_use(ProxyUse use, ProxyKind proved, const RayTypeFractions
 Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts& counts, const TraceCosts& costs,
                              const UseSetting& setting, std::uint64_t seed, int draws) {
   Random random(seed);
-  std::vector<double> values;
-  values.reserve(static_cast<std::size_t>(std::max(draws, 1)));
+  TraceCosts dearest = costs, cheapest = costs;
+  dearest.proxy_ns = costs.proxy_ns_high >= 0 ? std::max(costs.proxy_ns, costs.proxy_ns_high) : costs.proxy_ns;
+  cheapest.proxy_ns = costs.proxy_ns_low >= 0 ? std::min(costs.proxy_ns, costs.proxy_ns_low) : costs.proxy_ns;
+  std::vector<double> low_values, high_values;
+  low_values.reserve(static_cast<std::size_t>(std::max(draws, 1)));
+  high_values.reserve(static_cast<std::size_t>(std::max(draws, 1)));
   for (int draw = 0; draw < std::max(draws, 1); ++draw) {
     RayTypeFractions fractions;
     double total = 0;
@@ -189,13 +193,15 @@ Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts
       total += fractions.f[i];
     }
     for (double& value : fractions.f) value /= total;
-    values.push_back(predict_use_at(use, proved, fractions, costs, setting).efficiency);
+    low_values.push_back(predict_use_at(use, proved, fractions, dearest, setting).efficiency);
+    high_values.push_back(predict_use_at(use, proved, fractions, cheapest, setting).efficiency);
   }
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
+  std::sort(low_values.begin(), low_values.end());
+  std::sort(high_values.begin(), high_values.end());
+  const std::size_t n = low_values.size();
   const std::size_t lower = static_cast<std::size_t>(std::floor(0.025 * static_cast<double>(n)));
   const std::size_t upper = std::min(n - 1, static_cast<std::size_t>(std::ceil(0.975 * static_cast<double>(n))) - 1);
-  return {values[lower], values[upper]};
+  return {low_values[lower], high_values[upper]};
 }
 
 }  // namespace visproxy

@@ -44,6 +44,11 @@ std::string_view use_key(ProxyUse use);
 struct TraceCosts {
   double proxy_ns = 0;
   double mesh_ns = 0;
+  /// How far the proxy's cost may lie from proxy_ns, relative to mesh_ns, by the spread
+  /// of its timing (PairedTiming's least and greatest block ratio times mesh_ns); negative
+  /// for "as measured" (proxy_ns). Only efficiency_interval reads them.
+  double proxy_ns_low = -1;
+  double proxy_ns_high = -1;
 };
 
 /// A use's free parameters: eq. 8's term probabilities, the control variate's correction
@@ -92,7 +97,9 @@ struct Interval {
 /// central 95 % of the efficiency under `draws` draws of the fractions from their posterior
 /// (Dirichlet with the counts plus 1/2 on every type the proved kind allows; an outside
 /// proxy's type 2 and an inside proxy's type 3 are impossible, not just unseen), seeded. The
-/// costs are taken as measured: their timing noise is not in the interval.
+/// timing's spread is in it too: the lower end is the 2.5 % quantile with the proxy at its
+/// dearest (costs.proxy_ns_high), the upper the 97.5 % quantile at its cheapest
+/// (costs.proxy_ns_low), on the same draws; efficiency falls as the proxy's cost rises.
 Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts& counts, const TraceCosts& costs,
                              const UseSetting& setting, std::uint64_t seed, int draws = 2000);
 

@@ -61,7 +61,6 @@ json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& options) {
 }
 
 json measurement_json(const ProxyMeasurement& m) {
-  const double ratio = m.mesh_ns_per_ray > 0 ? m.proxy_ns_per_ray / m.mesh_ns_per_ray : 0.0;
   const bool bounded = std::isfinite(m.gssa_ratio_upper);
   return {{"counts", m.counts.counts},
           {"f_hit", interval(m.f_hit)},
@@ -77,7 +76,9 @@ json measurement_json(const ProxyMeasurement& m) {
            {{"proxy", m.proxy_ns_per_ray},
             {"mesh", m.mesh_ns_per_ray},
             {"estimator", m.estimator_ns_per_ray},
-            {"proxy_over_mesh", ratio}}}};
+            {"proxy_over_mesh", m.cost_ratio},
+            {"proxy_over_mesh_range", {m.cost_ratio_low, m.cost_ratio_high}},
+            {"timing_blocks", m.timing_blocks}}}};
 }
 
 json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder, json manifest,
@@ -150,7 +151,8 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     if (const double radius = options.scene.empty() ? reach(geometry, line_sphere.center) : 0; radius > line_sphere.radius) {
       const ReferenceRays lines{.rays = lengthen_chords(reference.rays, line_sphere.center, radius),
                                 .mesh_blocked = reference.mesh_blocked,
-                                .mesh_ns_per_ray = reference.mesh_ns_per_ray};
+                                .mesh_ns_per_ray = reference.mesh_ns_per_ray,
+                                .mesh = reference.mesh};
       measurement = measure_proxy(lines, proxy_scene, entry_kind(entry), options.timing);
       proxy_rays["proxy_sphere_radius"] = radius;
     } else {

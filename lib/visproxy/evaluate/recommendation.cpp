@@ -64,13 +64,14 @@ std::string choice_sentence(const Recommendation& r, std::size_t u, int best, in
             " as efficient; trace the mesh";
   } else {
     text += ", the best, " + p.name + ", is predicted " + figures_text(figures) +
-            " as efficient as the mesh: the interval holds 1, so no gain either way is shown";
+            " as efficient as the mesh: the interval holds 1, so no gain is shown; trace the mesh";
   }
   if (next >= 0) {
-    const UseFigures& other = r.proxies[static_cast<std::size_t>(next)].uses[u];
-    if (other.interval.upper >= figures.interval.lower)
-      text += " (" + r.proxies[static_cast<std::size_t>(next)].name + ", at " + figures_text(other) +
-              ", is not told apart from it by the intervals)";
+    const ProxyEfficiency& runner = r.proxies[static_cast<std::size_t>(next)];
+    const UseFigures& other = runner.uses[u];
+    if (other.interval.upper >= figures.interval.lower && figures.interval.upper >= other.interval.lower)
+      text += " (" + runner.name + ", at " + figures_text(other) + ", is not told apart from it by the intervals" +
+              (runner.primitives > p.primitives ? " and has more primitives" : "") + ")";
   }
   return text + ".";
 }
@@ -94,7 +95,13 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     const json& c = measured.at("counts");
     for (std::size_t i = 0; i < 4; ++i) counts.counts[i] = c.at(i).get<std::uint64_t>();
     const json& cost = measured.at("cost_ns_per_ray");
-    const TraceCosts costs{cost.value("proxy", 0.0), cost.value("mesh", 0.0)};
+    TraceCosts costs{cost.value("proxy", 0.0), cost.value("mesh", 0.0)};
+    // The blocks' spread of the proxy's cost relative to the mesh's timed beside it
+    // (manifests measured before the blocks had none: the cost as measured).
+    if (const auto range = cost.find("proxy_over_mesh_range"); range != cost.end() && range->is_array() && range->size() == 2) {
+      costs.proxy_ns_low = range->at(0).get<double>() * costs.mesh_ns;
+      costs.proxy_ns_high = range->at(1).get<double>() * costs.mesh_ns;
+    }
     const RayTypeFractions fractions = RayTypeFractions::from(counts);
     for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
       UseFigures& figures = p.uses[u];
@@ -106,16 +113,32 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     r.proxies.push_back(std::move(p));
   }
   for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
-    int best = -1, next = -1;
+    // The most efficient usable proxy; then, when it is shown cheaper than the mesh, of
+    // the proxies also shown cheaper whose intervals reach its interval (not told apart
+    // from it), the one with the fewest primitives: a choice that noise in the timing
+    // cannot flip between proxies the intervals do not separate. When the most efficient
+    // is not shown cheaper, the advice is to trace the mesh, and it is the one named.
+    int top = -1;
     for (std::size_t i = 0; i < r.proxies.size(); ++i) {
       const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
-      if (!candidate.usable) continue;
-      const int index = static_cast<int>(i);
-      if (best < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(best)].uses[u].prediction.efficiency) {
-        next = best, best = index;
-      } else if (next < 0 ||
-                 candidate.efficiency > r.proxies[static_cast<std::size_t>(next)].uses[u].prediction.efficiency) {
-        next = index;
+      if (candidate.usable && (top < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(top)].uses[u].prediction.efficiency))
+        top = static_cast<int>(i);
+    }
+    int best = top, next = -1;
+    if (top >= 0) {
+      const double reach = r.proxies[static_cast<std::size_t>(top)].uses[u].interval.lower;
+      for (std::size_t i = 0; i < r.proxies.size() && reach > 1; ++i) {
+        const ProxyEfficiency& candidate = r.proxies[i];
+        const UseFigures& f = candidate.uses[u];
+        if (!f.prediction.usable || f.interval.upper < reach || !(f.prediction.efficiency > 1 && f.interval.lower > 1)) continue;
+        if (candidate.primitives < r.proxies[static_cast<std::size_t>(best)].primitives) best = static_cast<int>(i);
+      }
+      // The runner-up: the most efficient other proxy.
+      for (std::size_t i = 0; i < r.proxies.size(); ++i) {
+        const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
+        if (static_cast<int>(i) == best || !candidate.usable) continue;
+        if (next < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(next)].uses[u].prediction.efficiency)
+          next = static_cast<int>(i);
       }
     }
     r.choices[u] = {kProxyUses[u], best, choice_sentence(r, u, best, next)};
@@ -171,7 +194,7 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
       {"efficiency",
        "(Var(V) c_mesh) / (Var c): how many times cheaper than tracing the mesh alone at equal error, with Var(V) = "
        "V_avg (1 - V_avg) and c the measured nanoseconds per ray on one core; intervals are 95 % over the sampling "
-       "of the measured rays, timing taken as measured"},
+       "of the measured rays, widened by the spread of the proxy's cost over the timing blocks"},
       {"uses", uses},
       {"proxies", proxies}};
 }

@@ -16,20 +16,46 @@
 namespace visproxy {
 
 struct TimingOptions {
-  std::size_t rays = 200000;  ///< the first this many rays are timed (all if fewer)
-  int repeats = 3;            ///< the fastest of this many passes is kept
+  std::size_t rays = 100000;  ///< the first this many rays are timed (all if fewer); 0: no timing
+  /// Timed passes: for a proxy, this many interleaved blocks, each one pass against the
+  /// mesh and one against the proxy (in alternating order), so that both see the same
+  /// state of the machine; for the mesh alone, this many passes.
+  int blocks = 6;
 };
 
 /// Wall time per ray of segment_blocked on one thread, in nanoseconds: the cost of a
-/// shadow ray against `scene` on one core. The fastest of options.repeats passes over
+/// shadow ray against `scene` on one core. The median of options.blocks passes over
 /// the first options.rays rays, after one untimed pass to warm caches. 0 for no rays.
 double nanoseconds_per_ray(const RayScene& scene, std::span<const Segment> rays, const TimingOptions& options = {});
+
+/// The cost of a proxy against the mesh's, timed in interleaved blocks on one thread.
+struct PairedTiming {
+  std::vector<double> mesh_ns, proxy_ns;  ///< per block, ns per ray
+  double mesh_median() const;
+  double proxy_median() const;
+  /// The median, least and greatest over the blocks of proxy_ns / mesh_ns. A block's two
+  /// passes run back to back, so a change of the machine's speed between blocks (other
+  /// work, frequency) moves both and leaves their ratio; the range of 6 blocks holds the
+  /// median ratio with probability 1 - 2^-5 (97 %) for any distribution of block ratios.
+  double ratio_median() const;
+  double ratio_low() const;
+  double ratio_high() const;
+};
+
+/// Times `proxy` against `mesh` on the first options.rays of `rays`: one warm-up pass of
+/// each, then options.blocks blocks of one pass each (mesh first in even blocks, proxy
+/// first in odd ones). Empty when nothing is timed.
+PairedTiming time_against_mesh(const RayScene& mesh, const RayScene& proxy, std::span<const Segment> rays,
+                               const TimingOptions& options = {});
 
 /// The rays and what the exact mesh does to them, computed once and shared by every proxy.
 struct ReferenceRays {
   std::vector<Segment> rays;
   std::vector<std::uint8_t> mesh_blocked;  ///< 1 where the mesh blocks rays[i]
   double mesh_ns_per_ray = 0;
+  /// The mesh's scene (it must outlive the reference), for timing proxies against it in
+  /// the same blocks; without it a proxy is timed alone and compared to mesh_ns_per_ray.
+  const RayScene* mesh = nullptr;
 };
 ReferenceRays trace_reference(const RayScene& mesh, std::vector<Segment> rays, const TimingOptions& timing = {});
 
@@ -52,15 +78,20 @@ struct ProxyMeasurement {
   Probabilities optimal;
   double variance_optimal = 0;  ///< eq. 16 per ray at `optimal`
   double variance_equal = 0;    ///< eq. 16 per ray at equal_probabilities(probability_form)
-  double proxy_ns_per_ray = 0;  ///< nanoseconds_per_ray of the proxy on the timed rays
-  double mesh_ns_per_ray = 0;   ///< same for the mesh, from the ReferenceRays
+  double proxy_ns_per_ray = 0;  ///< median ns per ray of the proxy on the timed rays
+  double mesh_ns_per_ray = 0;   ///< same for the mesh, timed in the same blocks
+  /// proxy_ns_per_ray / mesh_ns_per_ray as the blocks give it: the median block ratio and
+  /// the least and greatest (all equal when the proxy was timed alone); 0 when not timed.
+  double cost_ratio = 0, cost_ratio_low = 0, cost_ratio_high = 0;
+  int timing_blocks = 0;  ///< blocks timed in pairs with the mesh; 0 when timed alone
   /// Expected cost per estimate in ns at `optimal`: the proxy is always traced, the mesh
   /// with probability p2 on rays that hit the proxy and p3 on rays that miss it.
   double estimator_ns_per_ray = 0;
 };
 
 /// Measures `proxy` (a proxy of `kind`) on the reference rays: every ray traced against
-/// it in parallel, the cost timed on one thread on the same rays as the mesh.
+/// it in parallel, the cost timed on one thread on the same rays as the mesh, in blocks
+/// interleaved with the mesh's (time_against_mesh) when the reference holds its scene.
 ProxyMeasurement measure_proxy(const ReferenceRays& reference, const RayScene& proxy, ProxyKind kind,
                                const TimingOptions& timing = {});
 

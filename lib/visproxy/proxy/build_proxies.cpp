@@ -155,7 +155,7 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
     std::call_once(reference_made, [&] {
       const RayScene scene(mesh, bounding_sphere(mesh).center);
       reference = trace_reference(scene, isotropic_lines(bounding_sphere(mesh), options.gssa_lines, options.seed),
-                                  {.rays = 0, .repeats = 0});
+                                  {.rays = 0, .blocks = 0});
     });
     const RayScene spheres(proxy.spheres, bounding_sphere(mesh).center);
     const std::vector<std::uint8_t> blocked = spheres.segments_blocked(reference->rays);
