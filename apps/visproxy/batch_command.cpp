@@ -182,7 +182,7 @@ void add_batch_command(CLI::App& app, int& exit_code) {
   command->add_option("--merge", options->merge, "Only write the summary of the batch folder DIR (from every shard's records)");
   command->add_option("--one", options->one, "Process one asset in this process (what each worker runs)")->group("");
   command->add_option("--proxy", options->batch.proxies,
-                      "Proxy to build (repeatable), as for 'visproxy build'. Default: its default set (inside:40 only for closed meshes)");
+                      "Proxy to build (repeatable), as for 'visproxy build'. Default: its default set, with its notes (inside:40 only for closed meshes, no proxy over 10 % of the mesh)");
   command->add_option("--shard", options->shard, "This run's share of LIST: I/N, 0 <= I < N [default: 0/1, everything]");
   command->add_option("--jobs,-j", options->jobs, "Assets processed at once, each in its own process [default: 1]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{256}));

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "visproxy/evaluate/proxy_flags.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
 #include "visproxy/folder/proxy_folder.h"
@@ -144,7 +145,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
   command->add_option("--proxy", options->proxies,
                       "Proxy to build (repeatable):\n" + proxy_spec_help() +
                           "Default: aabb obb hull hull:32 wrap outer:512 quadric:512 cluster:0.03 inside:40 spheres:100 "
-                          "(inside:40 is left out, with a note, when the mesh is not closed)");
+                          "(left out, with a note: inside:40 when the mesh is not closed, and any proxy of at least 4096 "
+                          "primitives that is more than 10 % of the mesh's triangles)");
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
   as_choice<Weld>(command->add_option(
@@ -207,7 +209,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
                        .on_start = {},
                        .tets = options->tets,
                        .gssa_lines = options->gssa_lines,
-                       .skip_inside_unless_closed = options->proxies.empty(),
+                       .default_set = options->proxies.empty(),
                        .on_skip = [](std::string_view name, std::string_view reason) {
                          std::cerr << "visproxy build: skipping " << name << ": " << reason << "\n";
                        }};
@@ -231,6 +233,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
         build_proxy_folder(options->folder, mesh, options->mesh, options->weld, specs, build, [&] { watchdog.finish(); });
     print_table(*options, built.mesh, built.proxies,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    for (const ProxyFlag& flag : proxy_flags(built.manifest)) std::printf("check: %s\n", flag.text.c_str());
     exit_code = kSuccess;
   });
 }

@@ -58,6 +58,7 @@ void add_report_command(CLI::App& app, int& exit_code) {
     std::printf("visproxy report: %zu proxies of %s in %.2f s\n", manifest["proxies"].size(), mesh_path.string().c_str(), seconds);
     for (const UseChoice& choice : figures.recommendation.choices)
       if (!choice.sentence.empty()) std::printf("  %s\n", choice.sentence.c_str());
+    for (const ProxyFlag& flag : figures.flags) std::printf("  check: %s\n", flag.text.c_str());
     for (const char* file : {"report.html", "report.md", "recommendation.json", "f_miss.svg", "efficiency.svg"})
       std::printf("  %s\n", (options->folder / file).string().c_str());
     if (figures.pictured)

@@ -308,7 +308,7 @@ py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<s
       .on_start = {},
       .tets = parse_choice<InnerTetrahedra>("tets", tets),
       .gssa_lines = gssa_lines,
-      .skip_inside_unless_closed = !specs_text.has_value(),
+      .default_set = !specs_text.has_value(),
       .on_skip = {}};
   options.builders_at_once = builders_at_once;
   const Weld welded = parse_choice<Weld>("weld", weld);  // recorded in the manifest as how the source was read
@@ -365,7 +365,7 @@ py::object write_folder_report(const std::filesystem::path& folder, const std::o
     const ReportFigures figures =
         report_figures(read, folder, manifest, {.pictures = pictures, .picture_options = {.size = picture_size}});
     write_report(folder, manifest, figures);
-    recommendation = recommendation_json(figures.recommendation, manifest);
+    recommendation = report_recommendation_json(figures, manifest);
   }
   return to_python(recommendation);
 }

@@ -15,6 +15,7 @@
 #include "visproxy/inspect/exact_checks.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "visproxy/mesh/sphere_set.h"
 #include "test_meshes.h"
 #include "test_support.h"
 #include "visproxy/verify/containment.h"
@@ -129,6 +130,29 @@ TEST(BuildProxies, PerComponentBuildsOnePerComponent) {
   EXPECT_GT(joined[0].result.at("volume").get<double>(),
             10 * (proxies[1].result.at("components")[0].at("volume").get<double>() +
                   proxies[1].result.at("components")[1].at("volume").get<double>()));
+}
+
+// The default set leaves out a proxy that is not much simpler than the mesh (the convex
+// hull of a finely tessellated ball is the ball), saying why; asked for by name, it stays.
+TEST(BuildProxies, TheDefaultSetLeavesOutAProxyNearlyAsLargeAsTheMesh) {
+  const TriangleMesh ball = sphere_set_mesh({{{0.3, -2, 5}, 1.5}}, 5);
+  ASSERT_GE(ball.triangles.size(), 4 * kLargeProxyPrimitives);
+  std::vector<std::string> skipped;
+  BuildOptions options;
+  options.default_set = true;
+  options.on_skip = [&](std::string_view name, std::string_view reason) {
+    skipped.push_back(std::string(name) + ": " + std::string(reason));
+  };
+  const std::vector<BuiltProxy> kept = build_proxies(ball, "ball", parse_proxy_specs({"aabb", "hull", "hull:64"}), options);
+  ASSERT_EQ(kept.size(), 2u);
+  EXPECT_EQ(kept[0].name, "aabb");
+  EXPECT_EQ(kept[1].name, "hull-64");
+  ASSERT_EQ(skipped.size(), 1u);
+  EXPECT_EQ(skipped[0].rfind("hull: it has ", 0), 0u) << skipped[0];
+  EXPECT_NE(skipped[0].find("100 % of the mesh's"), std::string::npos) << skipped[0];
+  const std::vector<BuiltProxy> asked = build_proxies(ball, "ball", parse_proxy_specs({"hull"}));
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0].primitives, ball.triangles.size());
 }
 
 TEST(BuildProxies, InputErrorsNameTheSourceAndTheSpec) {

@@ -235,7 +235,7 @@ json process_asset(const fs::path& mesh_path, const fs::path& root, const BatchO
                        .on_start = {},
                        .tets = InnerTetrahedra::normals,
                        .gssa_lines = options.gssa_lines,
-                       .skip_inside_unless_closed = options.proxies.empty(),
+                       .default_set = options.proxies.empty(),
                        .on_skip = [&warn](std::string_view proxy, std::string_view reason) {
                          warn("skipped " + std::string(proxy) + ": " + std::string(reason));
                        }};

@@ -93,7 +93,10 @@ std::vector<Cell> row(const json& entry) {
   const double variance = number(entry, {"measure", "variance", "optimal"});
   cells.push_back({std::isnan(variance) ? "—" : format("%.4f", variance), variance});
   const double cost = number(entry, {"measure", "cost_ns_per_ray", "proxy_over_mesh"});
-  cells.push_back({std::isnan(cost) ? "—" : format("%.3f", cost), cost});
+  std::string cost_text = std::isnan(cost) ? "—" : format("%.3f", cost);
+  if (const json* range = find(entry, {"measure", "cost_ns_per_ray", "proxy_over_mesh_range"}); range && range->size() == 2)
+    cost_text += " (" + format("%.3f", (*range)[0].get<double>()) + "–" + format("%.3f", (*range)[1].get<double>()) + ")";
+  cells.push_back({cost_text, cost});
   return cells;
 }
 
@@ -117,7 +120,8 @@ std::string ray_summary(const json& manifest) {
   if (!rays) return "Not measured yet: run `visproxy measure MESH DIR`.";
   return "Measured on " + std::to_string(rays->value("count", 0)) + " " + rays->value("kind", std::string("rays")) +
          " (" + rays->value("description", std::string()) + "), seed " + std::to_string(rays->value("seed", 0)) +
-         "; cost timed on one core over the first " + std::to_string(rays->value("timed_rays", 0)) + " of them.";
+         "; cost timed on one core over the first " + std::to_string(rays->value("timed_rays", 0)) +
+         " of them, in blocks that time the mesh and the proxy back to back.";
 }
 
 const char* kColumnNotes =
@@ -129,7 +133,8 @@ const char* kColumnNotes =
     "p1 / p2 / p3: the estimator's variance-optimal probabilities (Billen et al. eq. 8): trace only the proxy / also "
     "the mesh when the proxy is hit / also the mesh when it is missed. "
     "variance: the estimator's variance per ray at those probabilities (eq. 16; 0 is exact). "
-    "cost ratio: time per ray of the proxy over that of the mesh, on one core, same rays. "
+    "cost ratio: time per ray of the proxy over that of the mesh, on one core, same rays: the median over blocks that "
+    "time both back to back, and in brackets the least and greatest block. "
     "verdict: whether the proxy keeps its kind's claim (outside: contains the mesh; inside: lies within it), checked "
     "exactly by `visproxy verify`.";
 
@@ -239,6 +244,7 @@ ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::pa
                              const ReportOptions& options) {
   ReportFigures figures;
   figures.picture_options = options.picture_options;
+  figures.flags = proxy_flags(manifest);
   std::map<std::string, InstanceProxy> proxies;
   for (const json& entry : manifest.at("proxies")) {
     const ProxyGeometry geometry = read_proxy_geometry(folder, entry);
@@ -269,6 +275,11 @@ std::string report_markdown(const json& manifest, const ReportFigures& figures) 
     for (const UseChoice& choice : figures.recommendation.choices) md += "- " + choice.sentence + "\n";
     const std::string intro = recommendation_intro(figures.recommendation);
     md += (intro.empty() ? std::string() : "\n" + intro + " Every proxy's figures: recommendation.json.\n") + "\n";
+  }
+  if (!figures.flags.empty()) {
+    md += "## Check before shipping\n\n";
+    for (const ProxyFlag& flag : figures.flags) md += "- " + flag.text + "\n";
+    md += "\n";
   }
   md += "Mesh: " + mesh_summary(manifest) + ".\n\n" + ray_summary(manifest) + "\n\n";
   const std::vector<std::string> head = headers();
@@ -406,6 +417,12 @@ std::string report_html(const json& manifest, const ReportFigures& figures) {
     before += "</ul>\n<p class=\"notes\">" + escape_html(recommendation_intro(figures.recommendation)) +
               " Every proxy's figures are in recommendation.json and in the efficiency plot below.</p>\n</section>\n";
   }
+  if (!figures.flags.empty()) {
+    before += "<section id=\"flags\">\n<h2>Check before shipping</h2>\n<ul>\n";
+    for (const ProxyFlag& flag : figures.flags)
+      before += "<li data-proxy=\"" + escape_html(flag.proxy) + "\" data-flag=\"" + flag.flag + "\">" + escape_html(flag.text) + "</li>\n";
+    before += "</ul>\n</section>\n";
+  }
   before += "<p>Mesh: " + escape_html(mesh_summary(manifest)) + ".</p>\n<p>" + escape_html(ray_summary(manifest)) + "</p>\n";
   std::string after = "<p class=\"notes\">" + escape_html(kColumnNotes) + " Click a column header to sort.</p>\n";
   if (figures.pictured) {
@@ -436,6 +453,12 @@ std::string report_html(const json& manifest, const ReportFigures& figures) {
   return sortable_table_page(title, before, headers(), rows, after);
 }
 
+json report_recommendation_json(const ReportFigures& figures, const json& manifest) {
+  json recommendation = recommendation_json(figures.recommendation, manifest);
+  recommendation["flags"] = flags_json(figures.flags);
+  return recommendation;
+}
+
 void write_report(const std::filesystem::path& folder, const json& manifest, const ReportFigures& figures) {
   if (figures.pictured) {
     const std::filesystem::path pictures = folder / "pictures";
@@ -453,7 +476,7 @@ void write_report(const std::filesystem::path& folder, const json& manifest, con
   write_file_atomically(folder / "f_miss.svg", f_miss_plot_svg(manifest));
   if (has_recommendation(figures)) {
     write_file_atomically(folder / "efficiency.svg", efficiency_plot_svg(manifest, figures.recommendation));
-    write_file_atomically(folder / "recommendation.json", recommendation_json(figures.recommendation, manifest).dump(2) + "\n");
+    write_file_atomically(folder / "recommendation.json", report_recommendation_json(figures, manifest).dump(2) + "\n");
   }
   write_file_atomically(folder / "report.md", report_markdown(manifest, figures));
   write_file_atomically(folder / "report.html", report_html(manifest, figures));

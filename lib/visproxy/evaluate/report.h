@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "visproxy/evaluate/proxy_flags.h"
 #include "visproxy/evaluate/recommendation.h"
 #include "visproxy/mesh/triangle_mesh.h"
 #include "visproxy/render/proxy_pictures.h"
@@ -26,11 +27,15 @@ struct ProxyPictureFiles {
 /// What the report computes from the files rather than reads from the manifest.
 struct ReportFigures {
   Recommendation recommendation;
+  std::vector<ProxyFlag> flags;  ///< proxy_flags of the manifest
   bool pictured = false;         ///< the pictures were made
   std::string mesh_shadow_png;   ///< the ground with the mesh's shadow
   std::map<std::string, ProxyPictureFiles> pictures;  ///< by proxy name
   ProxyPictureOptions picture_options;
 };
+
+/// recommendation.json: recommendation_json with the flags (proxy_flags) under `flags`.
+nlohmann::json report_recommendation_json(const ReportFigures& figures, const nlohmann::json& manifest);
 
 struct ReportOptions {
   bool pictures = true;  ///< render the pictures (a few seconds for a folder of ten proxies)

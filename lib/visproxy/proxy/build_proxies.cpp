@@ -4,6 +4,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <exception>
 #include <mutex>
 #include <new>
@@ -18,6 +20,7 @@
 #include "visproxy/measure/proxy_measurement.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/mesh/mesh_topology.h"
+#include "visproxy/proxy/proxy_methods.h"
 #include "visproxy/proxy/surface_distance.h"
 #include "visproxy/proxy/detail/watertight_input.h"
 #include "visproxy/trace/ray_scene.h"
@@ -84,6 +87,11 @@ std::vector<BuiltProxy> build_with_method(const ProxySpec& spec, const std::vect
     if (spheres) {
       proxy.primitives = proxy.spheres.size();
       proxy.mesh = sphere_set_mesh(proxy.spheres);
+      // Balls centred outside the mesh's bounding box mostly shadow space the mesh does not.
+      std::size_t outside = 0;
+      for (const Sphere& ball : proxy.spheres)
+        outside += (ball.center.array() < context.bounds.min.array()).any() || (ball.center.array() > context.bounds.max.array()).any();
+      proxy.result["balls_centred_outside_mesh_box"] = outside;
     } else if (proxy.mesh.triangles.empty()) {
       throw InvalidInputError(source, spec.text + ": every triangle collapsed, the proxy would be empty" + std::string(method.empty_hint));
     } else {
@@ -178,14 +186,30 @@ std::vector<BuiltProxy> build_proxies(const TriangleMesh& mesh, const std::files
   const MethodContext context{.diagonal = diagonal, .bounds = bounds, .options = &options};
   auto build_spec = [&](const ProxySpec& spec) -> std::vector<BuiltProxy> {
     if (options.on_start) options.on_start(spec.name());
-    if (spec.method->needs_closed_mesh && options.skip_inside_unless_closed) {
+    if (spec.method->needs_closed_mesh && options.default_set) {
       if (const std::optional<std::string> defects = closed_defects(mesh)) {
         if (options.on_skip)
           options.on_skip(spec.name(), "the mesh is not closed (" + *defects + "): an inside proxy needs a closed mesh");
         return {};
       }
     }
-    return build_with_method(spec, inputs, options, context, options.per_component, source);
+    std::vector<BuiltProxy> built = build_with_method(spec, inputs, options, context, options.per_component, source);
+    if (options.default_set)
+      std::erase_if(built, [&](const BuiltProxy& proxy) {
+        const double share = static_cast<double>(proxy.primitives) / static_cast<double>(mesh.triangles.size());
+        if (proxy.primitives < kLargeProxyPrimitives || share <= kDefaultMaxShareOfMesh) return false;
+        if (options.on_skip) {
+          char text[200];
+          std::snprintf(text, sizeof text,
+                        "it has %zu %ss, %.0f %% of the mesh's %zu triangles (the default set keeps proxies of at most "
+                        "%.0f %%); ask for it by name to keep it",
+                        proxy.primitives, std::string(primitive_type_name(proxy.primitive_type)).c_str(), 100 * share, mesh.triangles.size(),
+                        100 * kDefaultMaxShareOfMesh);
+          options.on_skip(proxy.name, text);
+        }
+        return true;
+      });
+    return built;
   };
   // A spec's measures: the GSSA of a sphere set, then every proxy's error.
   auto measure_spec = [&](std::vector<BuiltProxy>& built) {

@@ -59,9 +59,13 @@ struct BuildOptions {
   InnerTetrahedra tets = InnerTetrahedra::normals;
   /// Isotropic lines (seeded by `seed`) for the GSSA ratio of sphere proxies.
   std::size_t gssa_lines = 100000;
-  /// When the mesh is not closed, leave out inside:N (calling on_skip with its name and the
-  /// reason) instead of failing: for the default set, which holds inside:40.
-  bool skip_inside_unless_closed = false;
+  /// The specs are the default set (default_proxy_specs), not asked for by name. Then
+  /// inside:N is left out when the mesh is not closed (it needs a closed mesh), and so is a
+  /// proxy of more than kDefaultMaxShareOfMesh of the mesh's triangles and at least
+  /// kLargeProxyPrimitives primitives (the default set's proxies are meant to be far
+  /// simpler than the mesh; a convex hull of a finely curved mesh can keep a sixth of its
+  /// triangles), each with a call to on_skip naming it and why.
+  bool default_set = false;
   std::function<void(std::string_view name, std::string_view reason)> on_skip = {};
   /// Called before each proxy's error (and GSSA) is measured, with its spec's text, once
   /// every proxy is built; may be empty.
@@ -77,6 +81,11 @@ struct BuildOptions {
   /// they run at once (a watchdog's list of steps in progress); may be empty.
   std::function<void(std::string_view spec)> on_step_done = {};
 };
+
+/// The default set's largest share of the mesh's triangles (BuildOptions::default_set),
+/// and the size below which a proxy is never left out for its share.
+inline constexpr double kDefaultMaxShareOfMesh = 0.1;
+inline constexpr std::size_t kLargeProxyPrimitives = 4096;
 
 /// Above this many triangles, builders_at_once(0, ...) builds one spec at a time: each
 /// builder's memory grows with the input (2.25 GB for the default set at 4.8 M triangles).

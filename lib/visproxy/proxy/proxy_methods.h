@@ -62,7 +62,7 @@ struct ProxyMethodRow {
   MethodPiece (*build)(const ProxySpec& spec, const TriangleMesh& mesh, const BuildOptions& options) = nullptr;
   /// Said when every triangle collapsed and the proxy would be empty ("use a smaller cell").
   std::string_view empty_hint;
-  /// Needs a closed mesh (BuildOptions::skip_inside_unless_closed leaves it out otherwise).
+  /// Needs a closed mesh (the default set (BuildOptions::default_set) leaves it out otherwise).
   bool needs_closed_mesh = false;
 };
 
