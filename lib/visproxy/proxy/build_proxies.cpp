@@ -21,6 +21,7 @@
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/mesh/mesh_topology.h"
 #include "visproxy/proxy/proxy_methods.h"
+#include "visproxy/proxy/result_json.h"
 #include "visproxy/proxy/surface_distance.h"
 #include "visproxy/proxy/detail/watertight_input.h"
 #include "visproxy/trace/ray_scene.h"
@@ -30,18 +31,9 @@ namespace {
 
 using nlohmann::json;
 
-json to_json(const Vertex& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-json box_json(const OrientedBox& box) {
-  json axes = json::array();
-  for (int k = 0; k < 3; ++k) axes.push_back(to_json(box.axes.col(k)));
-  return {{"center", to_json(box.center)}, {"axes", axes}, {"half_extents", to_json(box.half_extents)}};
-}
-
-// {value, lower, upper}; an unbounded upper end is null (schema: $defs/interval).
-json interval_json(double value, double lower, double upper) {
-  return {{"value", value}, {"lower", lower}, {"upper", std::isfinite(upper) ? json(upper) : json(nullptr)}};
-}
+using detail::box_json;
+using detail::interval_json;
+using detail::to_json;
 
 // The spec's method on every input (the mesh, or each of its components), the pieces
 // joined: one BuiltProxy, or one per level for sphere methods, without the measures.

@@ -1,54 +1,18 @@
 #include "visproxy/proxy/meshopt_simplify.h"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <meshoptimizer.h>
 
 #include <algorithm>
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <set>
 #include <utility>
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/detail/output_mesh.h"
 
 namespace visproxy {
-namespace {
-
-bool exactly_collinear(const Vertex& a, const Vertex& b, const Vertex& c) {
-  using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
-  return CGAL::collinear(Point(a.x(), a.y(), a.z()), Point(b.x(), b.y(), b.z()), Point(c.x(), c.y(), c.z()));
-}
-
-// The kept triangles over the input's vertices they use, numbered in order of use, without
-// repeated indices, exactly collinear corners or repeats of the same three vertices.
-TriangleMesh output_mesh(const TriangleMesh& input, const std::vector<unsigned int>& indices) {
-  TriangleMesh mesh;
-  std::vector<std::uint32_t> output_index(input.positions.size(), std::numeric_limits<std::uint32_t>::max());
-  std::set<std::array<unsigned int, 3>> seen;
-  for (std::size_t i = 0; i + 2 < indices.size(); i += 3) {
-    const std::array<unsigned int, 3> tri{indices[i], indices[i + 1], indices[i + 2]};
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
-    if (exactly_collinear(input.positions[tri[0]], input.positions[tri[1]], input.positions[tri[2]])) continue;
-    std::array<unsigned int, 3> sorted = tri;
-    std::sort(sorted.begin(), sorted.end());
-    if (!seen.insert(sorted).second) continue;
-    Triangle out;
-    for (int c = 0; c < 3; ++c) {
-      std::uint32_t& index = output_index[tri[c]];
-      if (index == std::numeric_limits<std::uint32_t>::max()) {
-        index = static_cast<std::uint32_t>(mesh.positions.size());
-        mesh.positions.push_back(input.positions[tri[c]]);
-      }
-      out[c] = index;
-    }
-    mesh.triangles.push_back(out);
-  }
-  return mesh;
-}
-
-}  // namespace
 
 MeshoptSimplifyResult simplify_meshopt(const TriangleMesh& mesh, const MeshoptSimplifyOptions& options) {
   if (options.max_triangles == 0) throw InvalidInputError("", "the triangle budget of meshopt simplification is 0");
@@ -120,8 +84,10 @@ MeshoptSimplifyResult simplify_meshopt(const TriangleMesh& mesh, const MeshoptSi
       if (sloppy_target >= simplified.size()) break;
     }
   }
-  for (unsigned int& index : simplified) index = representative[index];
-  result.mesh = output_mesh(mesh, simplified);
+  std::vector<Triangle> triangles;
+  for (std::size_t i = 0; i + 2 < simplified.size(); i += 3)
+    triangles.push_back({representative[simplified[i]], representative[simplified[i + 1]], representative[simplified[i + 2]]});
+  result.mesh = detail::clean_output_mesh(mesh.positions, triangles);
   result.reached_target = result.mesh.triangles.size() <= options.max_triangles;
   return result;
 }

@@ -22,6 +22,7 @@
 #include "visproxy/proxy/outer_hull.h"
 #include "visproxy/proxy/proxy_spec.h"
 #include "visproxy/proxy/quadric_simplify.h"
+#include "visproxy/proxy/result_json.h"
 #include "visproxy/proxy/vertex_clustering.h"
 
 namespace visproxy {
@@ -93,18 +94,9 @@ void parse_closed_count(ProxySpec& spec, std::string_view argument) {
 json no_params(const ProxySpec&, const MethodContext&, std::size_t) { return json::object(); }
 json max_triangles(const ProxySpec& spec, const MethodContext&, std::size_t) { return {{"max_triangles", spec.count}}; }
 
-json to_json(const Vertex& v) { return json::array({v.x(), v.y(), v.z()}); }
-
-json box_json(const OrientedBox& box) {
-  json axes = json::array();
-  for (int k = 0; k < 3; ++k) axes.push_back(to_json(box.axes.col(k)));
-  return {{"center", to_json(box.center)}, {"axes", axes}, {"half_extents", to_json(box.half_extents)}};
-}
-
-// {value, lower, upper}; an unbounded upper end is null (schema: $defs/interval).
-json interval_json(double value, double lower, double upper) {
-  return {{"value", value}, {"lower", lower}, {"upper", std::isfinite(upper) ? json(upper) : json(nullptr)}};
-}
+using detail::box_json;
+using detail::interval_json;
+using detail::to_json;
 
 // ---------------------------------------------------------------------------------------
 // The methods.

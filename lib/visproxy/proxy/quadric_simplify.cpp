@@ -23,7 +23,6 @@
 
 #include "visproxy/proxy/quadric_simplify.h"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -38,6 +37,7 @@
 #include <vector>
 
 #include "visproxy/core/errors.h"
+#include "visproxy/proxy/detail/output_mesh.h"
 #include "visproxy/proxy/detail/plane_quadric.h"
 
 namespace visproxy {
@@ -102,11 +102,6 @@ std::uint64_t morton_code(const Vec3& p) {
     return x;
   };
   return spread(p.x()) | (spread(p.y()) << 1) | (spread(p.z()) << 2);
-}
-
-bool exactly_collinear(const Vec3& a, const Vec3& b, const Vec3& c) {
-  using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
-  return CGAL::collinear(Point(a.x(), a.y(), a.z()), Point(b.x(), b.y(), b.z()), Point(c.x(), c.y(), c.z()));
 }
 
 // Asks for every cache line of `object` (a hint: it reads nothing and cannot fault).
@@ -554,44 +549,14 @@ class QuadricSimplifier {
     return position_[v] * (diagonal_ > 0 ? diagonal_ : 1.0) + center_;
   }
 
-  // Surviving triangles without exactly collinear ones or repeats (the same three vertices
-  // in any order; the first is kept), over the vertices they use, numbered in order of use.
+  // Surviving triangles, cleaned as every simplifier's (detail::clean_output_mesh).
   TriangleMesh output_mesh() const {
     std::vector<Vertex> world(position_.size());
     for (std::uint32_t v = 0; v < position_.size(); ++v) world[v] = world_position(v);
-    std::vector<Triangle> kept, corners;
-    for (const Triangle& tri : triangles_) {
-      if (tri[0] == kDeadTriangle) continue;
-      if (exactly_collinear(world[tri[0]], world[tri[1]], world[tri[2]])) continue;
-      kept.push_back(tri);
-      corners.push_back(tri);
-      std::sort(corners.back().begin(), corners.back().end());
-    }
-    std::vector<std::uint32_t> order(kept.size());
-    std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&corners](std::uint32_t a, std::uint32_t b) {
-      return corners[a] != corners[b] ? corners[a] < corners[b] : a < b;
-    });
-    std::vector<std::uint8_t> duplicate(kept.size(), 0);
-    for (std::size_t i = 1; i < order.size(); ++i)
-      if (corners[order[i]] == corners[order[i - 1]]) duplicate[order[i]] = 1;
-
-    TriangleMesh mesh;
-    std::vector<std::uint32_t> output_index(position_.size(), kUnnumbered);
-    for (std::size_t t = 0; t < kept.size(); ++t) {
-      if (duplicate[t]) continue;
-      Triangle out;
-      for (int c = 0; c < 3; ++c) {
-        const std::uint32_t v = kept[t][c];
-        if (output_index[v] == kUnnumbered) {
-          output_index[v] = static_cast<std::uint32_t>(mesh.positions.size());
-          mesh.positions.push_back(world[v]);
-        }
-        out[c] = output_index[v];
-      }
-      mesh.triangles.push_back(out);
-    }
-    return mesh;
+    std::vector<Triangle> alive;
+    for (const Triangle& tri : triangles_)
+      if (tri[0] != kDeadTriangle) alive.push_back(tri);
+    return detail::clean_output_mesh(world, alive);
   }
 
   const TriangleMesh& input_;
