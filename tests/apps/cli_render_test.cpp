@@ -210,7 +210,7 @@ TEST_F(CliRender, GeneratedRoomRendersWithLightcutsAndProvedBounds) {
 // dropped, and are described by the schema. Bad VPL options get one line and no image.
 TEST_F(CliRender, KnotRoomRendersWithVirtualPointLights) {
   const std::filesystem::path scenes = std::filesystem::path(VISPROXY_SOURCE_DIR) / "data/scenes";
-  for (const char* name : {"knot-room.json", "armadillo-room.json"})
+  for (const char* name : {"knot-room.json", "armadillo-room.json", "menagerie-room.json"})
     testing::expect_described(json::parse(read_file(scenes / name)), "scene.schema.json");
   const std::filesystem::path knot = scenes / "knot-room.json";
   const std::string size = "--integrator vpl --vpls 48 --bounces 2 --spp 2 --width 24 --height 20 ";
