@@ -15,10 +15,12 @@
 #include <iostream>
 #include <map>
 #include <new>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "commands.h"
+#include "progress.h"
 #include "visproxy/evaluate/proxy_flags.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
@@ -78,6 +80,7 @@ class Watchdog {
 };
 
 struct BuildCommandOptions {
+  ProgressMode progress = ProgressMode::automatic;
   std::filesystem::path mesh;
   std::filesystem::path folder;
   std::vector<std::string> proxies;
@@ -147,6 +150,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
                           "Default: aabb obb hull hull:32 wrap outer:512 quadric:512 cluster:0.03 inside:40 spheres:100 "
                           "(left out, with a note: inside:40 when the mesh is not closed, and any proxy of at least 4096 "
                           "primitives that is more than 10 % of the mesh's triangles)");
+  add_progress_option(command, options->progress);
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
   as_choice<Weld>(command->add_option(
@@ -215,13 +219,9 @@ void add_build_command(CLI::App& app, int& exit_code) {
                        }};
     watchdog.done("");
     build.builders_at_once = options->builders_at_once;
-    const bool progress = ::isatty(STDERR_FILENO);
-    std::mutex progress_mutex;
+    std::optional<Progress> progress(std::in_place, "visproxy build", specs.size(), options->progress);
     build.on_start = [&](std::string_view name) {
-      if (progress) {
-        const std::lock_guard lock(progress_mutex);
-        std::cerr << "visproxy build: " << name << " ...\n";
-      }
+      progress->step(std::string("building ") + std::string(name));
       for (const ProxySpec& spec : specs)
         if (spec.name() == name) watchdog.step(spec.text, spec.text + ": out of time while building it");
     };
@@ -231,6 +231,7 @@ void add_build_command(CLI::App& app, int& exit_code) {
     build.on_step_done = [&](std::string_view spec) { watchdog.done(std::string(spec)); };
     const BuiltFolder built =
         build_proxy_folder(options->folder, mesh, options->mesh, options->weld, specs, build, [&] { watchdog.finish(); });
+    progress.reset();  // clears the terminal's progress line before the table
     print_table(*options, built.mesh, built.proxies,
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     for (const ProxyFlag& flag : proxy_flags(built.manifest)) std::printf("check: %s\n", flag.text.c_str());

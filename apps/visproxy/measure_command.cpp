@@ -9,6 +9,7 @@
 #include <string>
 
 #include "commands.h"
+#include "progress.h"
 #include "visproxy/evaluate/measure_proxies.h"
 #include "visproxy/folder/proxy_folder.h"
 
@@ -16,6 +17,7 @@ namespace visproxy::cli {
 namespace {
 
 struct MeasureCommandOptions {
+  ProgressMode progress = ProgressMode::automatic;
   std::filesystem::path mesh;
   std::filesystem::path folder;
   std::size_t rays = 1'000'000;
@@ -44,6 +46,7 @@ void add_measure_command(CLI::App& app, int& exit_code) {
   command->add_option("--scene", options->scene,
                       "Measure on a scene's shadow segments instead: from points its camera sees on other instances to "
                       "its lights, against every instance of MESH in it (--rays of them)");
+  add_progress_option(command, options->progress);
   command->add_option("--timed-rays", options->timed_rays, "Lines timed on one core for the cost per ray, in 6 blocks that time the mesh and the proxy back to back [default: 100000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
 
@@ -57,9 +60,11 @@ void add_measure_command(CLI::App& app, int& exit_code) {
                            .timing = {.rays = options->timed_rays},
                            .on_start = {},
                            .on_warning = print_warning};
-    if (::isatty(STDERR_FILENO))
-      measure.on_start = [](std::string_view name) { std::cerr << "visproxy measure: " << name << " ...\n"; };
-    manifest = measure_proxies(mesh, options->folder, std::move(manifest), measure);
+    {
+      Progress progress("visproxy measure", manifest["proxies"].size(), options->progress);
+      measure.on_start = [&progress](std::string_view name) { progress.step("measuring " + std::string(name)); };
+      manifest = measure_proxies(mesh, options->folder, std::move(manifest), measure);
+    }
     write_manifest(options->folder, manifest);
 
     const nlohmann::json& ray_set = manifest["proxies"].empty() ? nlohmann::json::object() : manifest["proxies"][0]["measure"]["rays"];

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "commands.h"
+#include "progress.h"
 #include "visproxy/folder/proxy_folder.h"
 #include "visproxy/folder/verdict.h"
 
@@ -15,6 +16,7 @@ namespace visproxy::cli {
 namespace {
 
 struct VerifyCommandOptions {
+  ProgressMode progress = ProgressMode::automatic;
   std::filesystem::path mesh;
   std::filesystem::path folder;
   std::size_t hausdorff_samples = 20000;
@@ -45,19 +47,20 @@ void add_verify_command(CLI::App& app, int& exit_code) {
                    "General proxies: area-uniform samples per surface for the Hausdorff distance [default: 20000]")
       ->check(CLI::Range(std::size_t{100}, std::size_t{100'000'000}));
   command->add_option("--seed", options->seed, "Seed of the Hausdorff samples [default: 1]");
+  add_progress_option(command, options->progress);
 
   command->callback([options, &exit_code] {
     nlohmann::json manifest = read_manifest(options->folder);
     const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest, print_warning);
-    const bool progress = ::isatty(STDERR_FILENO);
     std::size_t failures = 0;
     std::printf("visproxy verify: %zu proxies in %s against %s (%zu triangles)\n", manifest["proxies"].size(),
                 options->folder.string().c_str(), options->mesh.string().c_str(), mesh.triangles.size());
     std::printf("%-22s %-8s %-22s %-7s %12s %9s  %s\n", "name", "kind", "claim", "holds", "margin", "seconds",
                 "counterexample / note");
+    Progress progress("visproxy verify", manifest["proxies"].size(), options->progress);
     for (nlohmann::json& entry : manifest["proxies"]) {
       const std::string name = entry["name"].get<std::string>();
-      if (progress) std::cerr << "visproxy verify: " << name << " ...\n";
+      progress.step("verifying " + name);
       const ProxyGeometry geometry = read_proxy_geometry(options->folder, entry);
       nlohmann::json verify = verify_proxy(mesh, manifest, entry, geometry,
                                            {.hausdorff_samples = options->hausdorff_samples, .seed = options->seed});
@@ -69,6 +72,7 @@ void add_verify_command(CLI::App& app, int& exit_code) {
                       verify["hausdorff_world"].get<double>(), 100 * verify["hausdorff_relative"].get<double>());
         note = buffer;
       }
+      progress.clear();
       std::printf("%-22s %-8s %-22s %-7s %12s %9.3f  %s\n", name.c_str(), entry["kind"].get<std::string>().c_str(),
                   verify["claim"].get<std::string>().c_str(), holds ? "yes" : "NO", margin_text(verify).c_str(),
                   verify["seconds"].get<double>(), note.c_str());

@@ -78,6 +78,34 @@ TEST_F(CliBuild, DefaultSetOnKnotWritesEveryProxyAndAValidManifest) {
   EXPECT_EQ(entries[6].at("kind"), "general");
 }
 
+// Progress goes to stderr: as plain lines in a log with --progress always, never by default
+// when stderr is not a terminal (as here), and never with --progress never.
+TEST_F(CliBuild, ProgressLinesInALogOnlyWhenAskedFor) {
+  const auto mesh_path = testing::cgal_mesh("knot1.off");
+  const std::string mesh = "'" + mesh_path.string() + "' ";
+  const std::string dir = "'" + (folder_ / "p").string() + "'";
+  const auto always = testing::run_visproxy("build " + mesh + "-o " + dir + " --proxy aabb --proxy hull:8 --progress always");
+  ASSERT_EQ(always.exit_code, 0) << always.err;
+  EXPECT_NE(always.err.find("visproxy build: 1/2 (0 % done) building "), std::string::npos) << always.err;
+  EXPECT_NE(always.err.find("visproxy build: 2/2 (50 % done) building "), std::string::npos) << always.err;
+  EXPECT_NE(always.err.find("s left\n"), std::string::npos) << always.err;
+  EXPECT_EQ(always.err.find('\r'), std::string::npos) << "no terminal control in a log";
+  const auto verify = testing::run_visproxy("verify " + mesh + dir + " --progress always");
+  ASSERT_EQ(verify.exit_code, 0) << verify.err;
+  EXPECT_NE(verify.err.find("visproxy verify: 2/2 (50 % done) verifying hull-8"), std::string::npos) << verify.err;
+  const auto measure = testing::run_visproxy("measure " + mesh + dir + " --rays 2000 --timed-rays 100 --progress always");
+  ASSERT_EQ(measure.exit_code, 0) << measure.err;
+  EXPECT_NE(measure.err.find("visproxy measure: 1/2 (0 % done) measuring aabb"), std::string::npos) << measure.err;
+  for (const std::string quiet : {"", " --progress never"}) {
+    const auto result = testing::run_visproxy("verify " + mesh + dir + quiet);
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_EQ(result.err.find("% done"), std::string::npos) << result.err;
+  }
+  const auto bad = testing::run_visproxy("verify " + mesh + dir + " --progress sometimes");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("{auto, always, never}"), std::string::npos) << bad.err;
+}
+
 TEST_F(CliBuild, SameInputAndOptionsGiveByteIdenticalFiles) {
   const auto mesh_path = testing::cgal_mesh("knot2.off");
   const std::string proxies =
