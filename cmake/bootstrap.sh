@@ -16,8 +16,11 @@ packages="build-essential cmake ninja-build ccache pkg-config
   nlohmann-json3-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   libmeshoptimizer-dev libpng-dev libopenexr-dev
   python3-dev pybind11-dev python3-numpy libassimp-dev"
-# The test suite opens the HTML report in headless Chromium and runs the Python tests.
-if [ "$mode" = test ]; then packages="$packages chromium python3-pil python3-pytest parallel python3-distributed"; fi
+# The test suite opens the HTML report in headless Chromium and runs the Python tests;
+# pip, venv and setuptools: the test that pip installs the module into a virtual environment.
+if [ "$mode" = test ]; then
+  packages="$packages chromium python3-pil python3-pytest parallel python3-distributed python3-pip python3-venv python3-setuptools python3-wheel"
+fi
 
 missing=""
 for package in $packages; do
