@@ -78,12 +78,20 @@ void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self
   thread_local std::vector<std::int64_t> keep;
   bx.resize(count), by.resize(count), bz.resize(count), bc.resize(count), bt.resize(count), keep.resize(count);
   ball_disks(first, count, x_, n_, self_heuristic, bx.data(), by.data(), bz.data(), bc.data(), bt.data(), keep.data());
+  // The kept disks packed at the end of the arrays, without a branch per ball: every ball is
+  // written at the next free place, which only a kept one takes.
+  const std::size_t base = disks_.ux.size();
+  for (std::vector<float>* column : {&disks_.ux, &disks_.uy, &disks_.uz, &disks_.cos, &disks_.t}) column->resize(base + count);
+  float *ux = disks_.ux.data() + base, *uy = disks_.uy.data() + base, *uz = disks_.uz.data() + base;
+  float *cos = disks_.cos.data() + base, *t = disks_.t.data() + base;
+  std::size_t kept = 0;
   for (std::size_t i = 0; i < count; ++i) {
-    if (keep[i] == 0) continue;
-    disks_.push(static_cast<float>(bx[i]), static_cast<float>(by[i]), static_cast<float>(bz[i]), static_cast<float>(bc[i]),
-                static_cast<float>(bt[i]));
-    ++group.count;
+    ux[kept] = static_cast<float>(bx[i]), uy[kept] = static_cast<float>(by[i]), uz[kept] = static_cast<float>(bz[i]);
+    cos[kept] = static_cast<float>(bc[i]), t[kept] = static_cast<float>(bt[i]);
+    kept += static_cast<std::size_t>(keep[i] & 1);
   }
+  for (std::vector<float>* column : {&disks_.ux, &disks_.uy, &disks_.uz, &disks_.cos, &disks_.t}) column->resize(base + kept);
+  group.count = static_cast<std::uint32_t>(kept);
   if (group.count == 0) return;
   disks_.pad_to(kDiskBlock);
   count_ += group.count;
