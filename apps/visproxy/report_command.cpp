@@ -56,6 +56,8 @@ void add_report_command(CLI::App& app, int& exit_code) {
     write_report(options->folder, manifest, figures);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("visproxy report: %zu proxies of %s in %.2f s\n", manifest["proxies"].size(), mesh_path.string().c_str(), seconds);
+    if (!figures.recommendation.choices[0].sentence.empty())
+      for (const ShippingLine& line : shipping_lines(figures, manifest)) std::printf("  %s\n", line.text.c_str());
     for (const UseChoice& choice : figures.recommendation.choices)
       if (!choice.sentence.empty()) std::printf("  %s\n", choice.sentence.c_str());
     for (const ProxyFlag& flag : figures.flags) std::printf("  check: %s\n", flag.text.c_str());

@@ -348,6 +348,25 @@ TEST_F(CliVerifyMeasure, ReportListsEveryProxyRecommendsOneAndRendersInABrowser)
     EXPECT_EQ(p["bounds"]["usable"], outside) << p["name"];
   }
   EXPECT_NE(markdown.find(recommendation["uses"]["control_variate"]["sentence"].get<std::string>()), std::string::npos);
+  // What to ship comes first: for each use a file that is there, exactly where the proxy is
+  // shown cheaper than the mesh, with the shadow it would cast on its own; else keep the mesh.
+  EXPECT_EQ(markdown.find("## What to ship"), markdown.find("## "));
+  for (const char* use : {"control_variate", "eq8", "bounds"}) {
+    const json& choice = recommendation["uses"][use];
+    const std::string ship = choice["ship"].get<std::string>();
+    EXPECT_NE(markdown.find(ship), std::string::npos) << ship;
+    EXPECT_NE(result.out.find(ship), std::string::npos) << ship;
+    const bool beats = choice.value("beats_mesh", false);
+    ASSERT_EQ(choice["file"].is_string(), beats) << ship;
+    if (beats) {
+      const std::string file = choice["file"].get<std::string>();
+      EXPECT_TRUE(std::filesystem::is_regular_file(proxies_ / file)) << file;
+      EXPECT_NE(ship.find(", ship " + file + " ("), std::string::npos) << ship;
+      EXPECT_NE(ship.find("(cast on its own, it would miss "), std::string::npos) << ship;
+    } else {
+      EXPECT_NE(ship.find(", keep the mesh: no proxy is shown cheaper"), std::string::npos) << ship;
+    }
+  }
   // The pictures, as files and in the page.
   for (const char* file : {"mesh-shadow.png", "aabb-overlay.png", "hull-shadow.png", "wrap-difference.png", "quadric-256-overlay.png"})
     EXPECT_TRUE(std::filesystem::is_regular_file(proxies_ / "pictures" / file)) << file;

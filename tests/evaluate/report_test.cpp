@@ -64,7 +64,13 @@ TEST(Report, TheRecommendationComesFirstAndEveryProxyHasItsFourPictures) {
   const std::size_t recommendation = html.find("<section id=\"recommendation\">");
   ASSERT_NE(recommendation, std::string::npos);
   EXPECT_LT(recommendation, html.find("<table"));
-  EXPECT_EQ(occurrences(html, "<li data-use="), 3u);
+  // What to ship, then the recommendation: one line per use in each.
+  const std::size_t ship = html.find("<section id=\"ship\">");
+  ASSERT_NE(ship, std::string::npos);
+  EXPECT_LT(ship, recommendation);
+  EXPECT_EQ(occurrences(html, "<li data-use="), 6u);
+  for (const ShippingLine& line : shipping_lines(f.figures, f.manifest))
+    EXPECT_NE(html.find(escape_html(line.text)), std::string::npos) << line.text;
   EXPECT_NE(html.find(escape_html(f.figures.recommendation.choices[0].sentence)), std::string::npos);
   EXPECT_EQ(occurrences(html, "<figure class=\"proxy\""), 3u);
   EXPECT_EQ(occurrences(html, "src=\"data:image/png;base64,iVBORw0KGgo"), 12u);  // the PNG signature, base64

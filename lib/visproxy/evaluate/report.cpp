@@ -167,7 +167,7 @@ std::string recommendation_intro(const Recommendation& r) {
   return "Predicted on " + r.rays + " (seed " + std::to_string(r.seed) +
          "): efficiency is how many times cheaper than tracing the mesh alone a use is at equal error, 1 / (variance x "
          "cost) against the mesh's, with each use at its most efficient probabilities; intervals are 95 % over the "
-         "sampling of the rays, costs as timed.";
+         "sampling of the rays and the spread of the costs over their timing blocks.";
 }
 
 bool has_recommendation(const ReportFigures& figures) { return !figures.recommendation.choices[0].sentence.empty(); }
@@ -271,7 +271,9 @@ ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::pa
 std::string report_markdown(const json& manifest, const ReportFigures& figures) {
   std::string md = "# visproxy report: " + manifest.at("mesh").value("path", "?") + "\n\n";
   if (has_recommendation(figures)) {
-    md += "## Recommendation\n\n";
+    md += "## What to ship\n\n";
+    for (const ShippingLine& line : shipping_lines(figures, manifest)) md += "- " + line.text + "\n";
+    md += "\n## Recommendation\n\n";
     for (const UseChoice& choice : figures.recommendation.choices) md += "- " + choice.sentence + "\n";
     const std::string intro = recommendation_intro(figures.recommendation);
     md += (intro.empty() ? std::string() : "\n" + intro + " Every proxy's figures: recommendation.json.\n") + "\n";
@@ -411,6 +413,10 @@ std::string report_html(const json& manifest, const ReportFigures& figures) {
   }
   std::string before;
   if (has_recommendation(figures)) {
+    before += "<section id=\"ship\">\n<h2>What to ship</h2>\n<ul>\n";
+    for (const ShippingLine& line : shipping_lines(figures, manifest))
+      before += "<li data-use=\"" + line.use_key + "\">" + escape_html(line.text) + "</li>\n";
+    before += "</ul>\n</section>\n";
     before += "<section id=\"recommendation\">\n<h2>Recommendation</h2>\n<ul>\n";
     for (const UseChoice& choice : figures.recommendation.choices)
       before += "<li data-use=\"" + std::string(use_key(choice.use)) + "\">" + escape_html(choice.sentence) + "</li>\n";
@@ -453,8 +459,51 @@ std::string report_html(const json& manifest, const ReportFigures& figures) {
   return sortable_table_page(title, before, headers(), rows, after);
 }
 
+std::vector<ShippingLine> shipping_lines(const ReportFigures& figures, const json& manifest) {
+  std::vector<ShippingLine> lines;
+  const Recommendation& r = figures.recommendation;
+  for (std::size_t u = 0; u < r.choices.size(); ++u) {
+    const UseChoice& choice = r.choices[u];
+    const std::string use = choice.use == ProxyUse::control_variate ? "For shadow rays through the control variate"
+                            : choice.use == ProxyUse::term_choice   ? "For shadow rays through eq. 8"
+                                                                    : "For exact shadows through bounds";
+    ShippingLine line{std::string(use_key(choice.use)), "", ""};
+    const ProxyEfficiency* p = choice.best >= 0 ? &r.proxies[static_cast<std::size_t>(choice.best)] : nullptr;
+    const UseFigures* f = p ? &p->uses[u] : nullptr;
+    const json* entry = nullptr;
+    if (p)
+      for (const json& e : manifest.at("proxies"))
+        if (e.value("name", std::string()) == p->name) entry = &e;
+    if (!p || !entry || !(f->prediction.efficiency > 1 && f->interval.lower > 1)) {
+      line.text = use + ", keep the mesh: no proxy is shown cheaper than it" +
+                  (p ? std::string(" (the best, ") + p->name + ", is predicted " + format("%#.3g", f->prediction.efficiency) + "x)" : "") + ".";
+      lines.push_back(std::move(line));
+      continue;
+    }
+    line.file = entry->value("file", std::string());
+    const std::string type = entry->value("primitive_type", std::string("triangle"));
+    const double count = entry->value("primitives", 0.0);
+    line.text = use + ", ship " + line.file + " (" + format("%.0f", count) + " " +
+                (count == 1 ? type : type == "box" ? "boxes" : type + "s") + ") beside the mesh: shadow rays are predicted " +
+                format("%#.3g", f->prediction.efficiency) + "x [" + format("%#.3g", f->interval.lower) + ", " +
+                format("%#.3g", f->interval.upper) + "] cheaper, the shadows " +
+                (choice.use == ProxyUse::bounds ? "unchanged" : "unbiased at equal noise");
+    if (const auto pictured = figures.pictures.find(p->name); pictured != figures.pictures.end())
+      line.text += " (cast on its own, it would miss " + percent(pictured->second.missed_shadow) +
+                   " of the mesh's shadow and add " + percent(pictured->second.extra_shadow) + ")";
+    line.text += ".";
+    lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
 json report_recommendation_json(const ReportFigures& figures, const json& manifest) {
   json recommendation = recommendation_json(figures.recommendation, manifest);
+  for (const ShippingLine& line : shipping_lines(figures, manifest)) {
+    json& use = recommendation["uses"][line.use_key];
+    use["ship"] = line.text;
+    use["file"] = line.file.empty() ? json(nullptr) : json(line.file);
+  }
   recommendation["flags"] = flags_json(figures.flags);
   return recommendation;
 }
