@@ -145,10 +145,13 @@ def test_the_page_loads_with_no_console_error(page):
         elif method == "Log.entryAdded" and params["entry"].get("level") == "error":
             problems.append(params["entry"].get("text"))
     assert problems == []
-    # The script ran, and the recommendation is the first thing under the title.
+    # The script ran; what to ship is the first thing under the title, then the recommendation.
     assert page.evaluate("document.getElementById('sortable').dataset.sortable") == "ready"
     first = page.evaluate("document.querySelector('h1').nextElementSibling.id")
-    assert first == "recommendation"
+    assert first == "ship"
+    assert page.evaluate("document.getElementById('ship').nextElementSibling.id") == "recommendation"
+    ship = page.evaluate("Array.from(document.querySelectorAll('#ship li')).map(li => li.dataset.use)")
+    assert ship == ["control_variate", "eq8", "bounds"]
     sentences = page.evaluate("Array.from(document.querySelectorAll('#recommendation li')).map(li => li.textContent)")
     assert [s.split(",")[0] for s in sentences] == ["For shadow rays through the control variate",
                                                     "For shadow rays through eq. 8", "For exact shadow rays through bounds"]
