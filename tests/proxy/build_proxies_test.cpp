@@ -155,6 +155,32 @@ TEST(BuildProxies, TheDefaultSetLeavesOutAProxyNearlyAsLargeAsTheMesh) {
   EXPECT_EQ(asked[0].primitives, ball.triangles.size());
 }
 
+// quadric:P% and meshopt:P% take P % of the input's triangles as their budget, of each
+// component's with --per-component, and record the count they were given.
+TEST(BuildProxies, ABudgetAsAShareIsTheInputsTriangles) {
+  const TriangleMesh ball = sphere_set_mesh({{{0.3, -2, 5}, 1.5}}, 4);  // 5120 triangles
+  const std::vector<BuiltProxy> built = build_proxies(ball, "ball", parse_proxy_specs({"quadric:10%", "meshopt:5%"}));
+  ASSERT_EQ(built.size(), 2u);
+  EXPECT_EQ(built[0].name, "quadric-10pct");
+  EXPECT_EQ(built[0].params.at("max_triangles"), 512);
+  EXPECT_DOUBLE_EQ(built[0].params.at("share_of_triangles").get<double>(), 0.1);
+  EXPECT_LE(built[0].primitives, 512u);
+  EXPECT_GT(built[0].primitives, 256u);
+  EXPECT_EQ(built[1].params.at("max_triangles"), 256);
+  EXPECT_LE(built[1].primitives, 256u);
+  // Two balls, one four times as finely tessellated: each gets its own share.
+  TriangleMesh two = sphere_set_mesh({{{0, 0, 0}, 1.0}}, 2);  // 320 triangles
+  append_mesh(two, sphere_set_mesh({{{5, 0, 0}, 1.0}}, 3));   // 1280 triangles
+  BuildOptions options;
+  options.per_component = true;
+  const std::vector<BuiltProxy> parts = build_proxies(two, "two", parse_proxy_specs({"quadric:25%"}), options);
+  EXPECT_EQ(parts[0].params.at("max_triangles"), 80 + 320);
+  const nlohmann::json& components = parts[0].result.at("components");
+  ASSERT_EQ(components.size(), 2u);
+  EXPECT_LE(components[0].at("triangles").get<std::size_t>(), 80u);
+  EXPECT_LE(components[1].at("triangles").get<std::size_t>(), 320u);
+}
+
 TEST(BuildProxies, InputErrorsNameTheSourceAndTheSpec) {
   TriangleMesh line;
   line.positions = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}};

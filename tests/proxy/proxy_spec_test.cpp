@@ -30,6 +30,28 @@ TEST(ProxySpec, ParsesEveryMethodAndNamesIt) {
   EXPECT_EQ(cluster.kind(), ProxyKind::general);
 }
 
+// A simplifier's budget as a share of the mesh's triangles, as Blender's Decimate ratio:
+// parsed as the share, named without a '%', refused outside (0, 100] or for methods whose
+// N is not a triangle budget of a simplifier.
+TEST(ProxySpec, SimplifiersTakeABudgetAsAShareOfTheTriangles) {
+  const ProxySpec quadric = parse_proxy_spec("quadric:10%");
+  EXPECT_DOUBLE_EQ(quadric.count_share, 0.1);
+  EXPECT_EQ(quadric.count, 0u);
+  EXPECT_EQ(quadric.name(), "quadric-10pct");
+  EXPECT_DOUBLE_EQ(parse_proxy_spec("meshopt:2.5%").count_share, 0.025);
+  EXPECT_EQ(parse_proxy_spec("meshopt:100%").name(), "meshopt-100pct");
+  EXPECT_DOUBLE_EQ(parse_proxy_spec("quadric:512").count_share, 0.0);
+  for (const char* bad : {"quadric:0%", "quadric:150%", "quadric:%", "quadric:ten%", "quadric:-5%", "meshopt:nan%",
+                          "outer:10%", "hull:10%", "inside:10%"}) {
+    try {
+      parse_proxy_spec(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(bad), std::string::npos) << error.what();
+    }
+  }
+}
+
 TEST(ProxySpec, InnerHullTakesABudgetAndAGrid) {
   const ProxySpec inner = parse_proxy_spec("inner:512");
   EXPECT_TRUE(inner.is("inner_hull"));

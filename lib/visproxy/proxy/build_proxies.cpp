@@ -45,12 +45,20 @@ std::vector<BuiltProxy> build_with_method(const ProxySpec& spec, const std::vect
   const std::vector<std::string> names = spec.output_names();
   std::vector<BuiltProxy> proxies(names.size());
   json component_results = json::array(), summary = json::object();
+  std::size_t resolved_count = 0;  // the budget of a share, over every input
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t c = 0; c < inputs.size(); ++c) {
     MethodPiece piece;
     const std::string where = per_component ? " (component " + std::to_string(c) + ")" : "";
     try {
-      piece = method.build(spec, *inputs[c], options);
+      // A budget given as a share of the triangles becomes this input's count.
+      ProxySpec resolved = spec;
+      if (spec.count_share > 0) {
+        resolved.count = std::max<std::size_t>(
+            1, static_cast<std::size_t>(std::llround(spec.count_share * static_cast<double>(inputs[c]->triangles.size()))));
+        resolved_count += resolved.count;
+      }
+      piece = method.build(resolved, *inputs[c], options);
     } catch (const InvalidInputError& error) {
       throw InvalidInputError(source, spec.text + where + ": " + error.problem());
     } catch (const std::bad_alloc&) {
@@ -74,6 +82,10 @@ std::vector<BuiltProxy> build_with_method(const ProxySpec& spec, const std::vect
     proxy.name = names[k];
     proxy.method = std::string(method.method);
     proxy.params = method.params(spec, context, k);
+    if (spec.count_share > 0) {
+      proxy.params["max_triangles"] = resolved_count;  // summed over the components
+      proxy.params["share_of_triangles"] = spec.count_share;
+    }
     proxy.primitive_type = method.primitives;
     proxy.build_seconds = seconds;
     if (spheres) {

@@ -83,6 +83,18 @@ void parse_nothing(ProxySpec&, std::string_view) {}
 
 void parse_count_only(ProxySpec& spec, std::string_view argument) { spec.count = parse_count(spec, argument); }
 
+// N, or P% of the input's triangles (as Blender's Decimate ratio), P in (0, 100].
+void parse_count_or_share(ProxySpec& spec, std::string_view argument) {
+  if (argument.empty() || argument.back() != '%') return parse_count_only(spec, argument);
+  const std::string_view number = argument.substr(0, argument.size() - 1);
+  double percent = 0;
+  const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), percent);
+  if (error != std::errc() || end != number.data() + number.size() || number.empty() || !std::isfinite(percent))
+    fail_spec(spec.text, "P of P% must be a number, got '" + std::string(number) + "'");
+  if (percent <= 0 || percent > 100) fail_spec(spec.text, "P of P% must be in (0, 100], got " + std::string(number));
+  spec.count_share = percent / 100;
+}
+
 void parse_closed_count(ProxySpec& spec, std::string_view argument) {
   spec.count = parse_count(spec, argument);
   if (spec.count < 4) fail_spec(spec.text, "a closed mesh has at least 4 triangles");
@@ -357,13 +369,13 @@ const std::vector<ProxyMethodRow>& proxy_methods() {
        "sqrt(2N), 16-256)",
        "marching-tetrahedra surface inside the solid, decimated by conservative edge collapses", 0, parse_inner,
        inner_params, build_inner, "", false},
-      {"quadric", "quadric", "quadric:N", Argument::required, K::general, P::triangle,
-       "quadric edge collapse to at most N triangles", "quadric edge collapse", 3, parse_count_only, max_triangles,
-       build_quadric, "", false},
-      {"meshopt", "meshopt", "meshopt:N", Argument::required, K::general, P::triangle,
-       "meshoptimizer's simplifier to at most N triangles (its sloppy pass where topology stops it)",
+      {"quadric", "quadric", "quadric:N|P%", Argument::required, K::general, P::triangle,
+       "quadric edge collapse to at most N triangles, or P % of the mesh's", "quadric edge collapse", 3,
+       parse_count_or_share, max_triangles, build_quadric, "", false},
+      {"meshopt", "meshopt", "meshopt:N|P%", Argument::required, K::general, P::triangle,
+       "meshoptimizer's simplifier to at most N triangles, or P % of the mesh's (its sloppy pass where topology stops it)",
        "meshoptimizer 0.18 edge collapse (meshopt_simplify, then meshopt_simplifySloppy if above the budget)", 4,
-       parse_count_only, max_triangles, build_meshopt, " (use a larger N)", false},
+       parse_count_or_share, max_triangles, build_meshopt, " (use a larger N)", false},
       {"clustering", "cluster", "cluster:F", Argument::required, K::general, P::triangle,
        "vertex clustering, cell F x largest bbox extent", "vertex clustering", 4, parse_cluster, cluster_params,
        build_cluster, " (use a smaller cell)", false},

@@ -14,9 +14,8 @@ std::vector<std::string> ProxySpec::output_names() const {
     for (const std::size_t level : levels) names.push_back(std::string(method->name) + "-" + std::to_string(level));
     return names;
   }
-  std::string name = text;
-  for (char& c : name)
-    if (c == ':' || c == ',') c = '-';
+  std::string name;
+  for (const char c : text) name += c == ':' || c == ',' ? std::string("-") : c == '%' ? std::string("pct") : std::string(1, c);
   return {name};
 }
 

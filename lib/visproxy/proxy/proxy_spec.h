@@ -23,6 +23,10 @@ struct ProxySpec {
   const ProxyMethodRow* method = &proxy_method("aabb");  ///< its row in the table of methods
   std::string text;               ///< the spec as given, e.g. "hull:32"
   std::size_t count = 0;          ///< N of hull:N, outer:N, inner:N, quadric:N, inside:N
+  /// P / 100 of quadric:P% and meshopt:P%: the budget as a share of the input's triangles
+  /// (each component's with --per-component), made a count N when the input is known
+  /// (at least 1); 0 when the spec gives N.
+  double count_share = 0;
   std::size_t grid_cells = 0;     ///< G of inner:N,grid=G; 0: chosen from N (inner_hull_grid_cells)
   double cell_size_relative = 0;  ///< F of cluster:F
   double alpha_relative = kDefaultWrapAlphaRelative;    ///< wrap
@@ -32,7 +36,8 @@ struct ProxySpec {
   MergeRadius merge_radius = MergeRadius::exact;  ///< spheres
   std::size_t samples = 0;  ///< spheres: surface samples, 0 for max(4000, 4 x levels[0])
 
-  /// The file and manifest name: the spec with ':' and ',' turned into '-' ("hull-32");
+  /// The file and manifest name: the spec with ':' and ',' turned into '-' and '%' into
+  /// "pct" ("hull-32", "quadric-10pct");
   /// sphere methods: "NAME-N" of the first (largest) level ("spheres-100").
   std::string name() const;
   /// Every proxy the spec makes, by name: one, except sphere methods: "NAME-N" per level.
