@@ -17,6 +17,7 @@ struct ReportCommandOptions {
   std::filesystem::path mesh;
   bool no_pictures = false;
   int picture_size = 192;
+  std::size_t budget = 0;
 };
 
 }  // namespace
@@ -39,6 +40,10 @@ void add_report_command(CLI::App& app, int& exit_code) {
   command->add_flag("--no-pictures", options->no_pictures, "Leave out the pictures (the recommendation still needs the mesh)");
   command->add_option("--picture-size", options->picture_size, "Pixels on a side of each picture [default: 192]")
       ->check(CLI::Range(32, 1024));
+  command->add_option("--budget", options->budget,
+                      "Recommend only proxies of at most N primitives (triangles, boxes or spheres); the others keep their "
+                      "rows [default: any]")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
     const nlohmann::json manifest = read_manifest(options->folder);
@@ -52,7 +57,8 @@ void add_report_command(CLI::App& app, int& exit_code) {
     }
     const TriangleMesh mesh = read_manifest_mesh(mesh_path, manifest, print_warning);
     const ReportFigures figures = report_figures(
-        mesh, options->folder, manifest, {.pictures = !options->no_pictures, .picture_options = {.size = options->picture_size}});
+        mesh, options->folder, manifest,
+        {.pictures = !options->no_pictures, .picture_options = {.size = options->picture_size}, .budget = options->budget});
     write_report(options->folder, manifest, figures);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("visproxy report: %zu proxies of %s in %.2f s\n", manifest["proxies"].size(), mesh_path.string().c_str(), seconds);

@@ -355,7 +355,7 @@ py::object read_manifest_dict(const std::filesystem::path& folder) {
 }
 
 py::object write_folder_report(const std::filesystem::path& folder, const std::optional<std::filesystem::path>& mesh,
-                               bool pictures, int picture_size) {
+                               bool pictures, int picture_size, std::size_t budget) {
   json recommendation;
   {
     py::gil_scoped_release release;
@@ -363,7 +363,7 @@ py::object write_folder_report(const std::filesystem::path& folder, const std::o
     const TriangleMesh read = read_manifest_mesh(mesh ? *mesh : std::filesystem::path(manifest["mesh"]["path"].get<std::string>()),
                                                  manifest);
     const ReportFigures figures =
-        report_figures(read, folder, manifest, {.pictures = pictures, .picture_options = {.size = picture_size}});
+        report_figures(read, folder, manifest, {.pictures = pictures, .picture_options = {.size = picture_size}, .budget = budget});
     write_report(folder, manifest, figures);
     recommendation = report_recommendation_json(figures, manifest);
   }
@@ -562,12 +562,12 @@ PYBIND11_MODULE(visproxy, m) {
         "'visproxy measure' does. Returns one measure dict per proxy: counts, f_hit, f_miss, v_avg, gssa_ratio (value, "
         "lower, upper at 95 %), optimal probabilities, variance, cost_ns_per_ray.");
   m.def("report", &write_folder_report, "folder"_a, py::kw_only(), "mesh"_a = py::none(), "pictures"_a = true,
-        "picture_size"_a = 192,
+        "picture_size"_a = 192, "budget"_a = 0,
         "Writes the report of a proxy folder as 'visproxy report' does (report.html, report.md, recommendation.json, "
         "f_miss.svg, efficiency.svg and, with `pictures`, pictures/*.png) and returns the recommendation as a dict: for "
         "each use (control_variate, eq8, bounds) the proxy with the best predicted efficiency against the mesh and its "
         "sentence, and every proxy's figures. `mesh`: the mesh the proxies were built from [default: the path the "
-        "manifest records].");
+        "manifest records]. `budget`: recommend only proxies of at most this many primitives (0: any), as --budget.");
   m.def("disable_transparent_huge_pages", &visproxy::disable_transparent_huge_pages,
         "Turns transparent huge pages off for this process and those it starts, as the visproxy command does (unless "
         "the environment variable VISPROXY_TRANSPARENT_HUGE_PAGES is 1); returns whether they are now off. Embree "

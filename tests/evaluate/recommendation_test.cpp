@@ -208,6 +208,25 @@ TEST(Recommendation, NoiseBetweenRunsDoesNotFlipTheChoice) {
   for (const UseChoice& choice : recommend_proxies(manifest, as_claimed()).choices) EXPECT_EQ(choice.best, 0) << choice.sentence;
 }
 
+// A budget of primitives: a proxy over it is usable for no use, says why, keeps its row,
+// and the recommendation goes to the best one within the budget.
+TEST(Recommendation, ABudgetLeavesOutTheLargerProxies) {
+  const json manifest = manifest_of({entry("big", "outside", {3000, 0, 100, 6900}, 20, 200, 5000),
+                                     entry("small", "outside", {3000, 0, 900, 6100}, 20, 200, 300)});
+  const Recommendation any = recommend_proxies(manifest, as_claimed());
+  EXPECT_EQ(any.choices[index_of(ProxyUse::bounds)].best, 0);
+  const Recommendation within = recommend_proxies(manifest, as_claimed(), 1000);
+  ASSERT_EQ(within.proxies.size(), 2u);
+  for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
+    EXPECT_EQ(within.choices[u].best, 1) << within.choices[u].sentence;
+    EXPECT_FALSE(within.proxies[0].uses[u].prediction.usable);
+    EXPECT_EQ(within.proxies[0].uses[u].prediction.why_not, "over the budget of 1000 primitives");
+  }
+  const Recommendation none = recommend_proxies(manifest, as_claimed(), 100);
+  for (const UseChoice& choice : none.choices) EXPECT_EQ(choice.best, -1) << choice.sentence;
+  EXPECT_NE(none.choices[0].sentence.find("over the budget of 100 primitives"), std::string::npos) << none.choices[0].sentence;
+}
+
 TEST(Recommendation, UntimedCostsMakeNoClaim) {
   const json manifest = manifest_of({entry("a", "outside", {3000, 0, 400, 6600}, 0, 0)});
   const Recommendation r = recommend_proxies(manifest, as_claimed());

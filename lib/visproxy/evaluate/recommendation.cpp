@@ -78,7 +78,7 @@ std::string choice_sentence(const Recommendation& r, std::size_t u, int best, in
 
 }  // namespace
 
-Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_kind) {
+Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_kind, std::size_t budget) {
   Recommendation r;
   for (const json& entry : manifest.at("proxies")) {
     if (!entry.contains("measure") || !entry["measure"].is_object()) continue;
@@ -106,6 +106,10 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
       UseFigures& figures = p.uses[u];
       figures.prediction = predict_use(kProxyUses[u], p.proved, fractions, costs);
+      if (budget > 0 && p.primitives > static_cast<double>(budget)) {
+        figures.prediction.usable = false, figures.prediction.efficiency = 0;
+        figures.prediction.why_not = "over the budget of " + std::to_string(budget) + " primitives";
+      }
       if (figures.prediction.usable)
         figures.interval = efficiency_interval(kProxyUses[u], p.proved, counts, costs, figures.prediction.setting,
                                                r.seed + 0x9E3779B97F4A7C15ull * (r.proxies.size() * 3 + u + 1));

@@ -57,7 +57,9 @@ using ProvedKind = std::function<ProxyKind(const nlohmann::json& entry)>;
 /// The recommendation from a measured manifest: each entry with a `measure` object (its
 /// ray-type counts and costs per ray) is predicted for every use, its interval drawn with
 /// the measurement's seed. Entries not measured are left out.
-Recommendation recommend_proxies(const nlohmann::json& manifest, const ProvedKind& proved_kind);
+/// With `budget` above 0, a proxy of more primitives (triangles, boxes or spheres) is not
+/// usable for any use ("over the budget of N primitives"), but keeps its row.
+Recommendation recommend_proxies(const nlohmann::json& manifest, const ProvedKind& proved_kind, std::size_t budget = 0);
 
 /// recommendation.json (data/schemas/recommendation.schema.json): the rays, the seed, one
 /// object per use with the sentence and the chosen proxy, and every proxy's figures.

@@ -252,10 +252,13 @@ ReportFigures report_figures(const TriangleMesh& mesh, const std::filesystem::pa
     proxies[entry.at("name").get<std::string>()] =
         InstanceProxy{entry_kind(entry), entry.value("spec", std::string()), geometry.mesh, geometry.spheres, proved};
   }
-  figures.recommendation = recommend_proxies(manifest, [&](const json& entry) {
-    const InstanceProxy& proxy = proxies.at(entry.at("name").get<std::string>());
-    return proxy.proved ? proxy.kind : ProxyKind::general;
-  });
+  figures.recommendation = recommend_proxies(
+      manifest,
+      [&](const json& entry) {
+        const InstanceProxy& proxy = proxies.at(entry.at("name").get<std::string>());
+        return proxy.proved ? proxy.kind : ProxyKind::general;
+      },
+      options.budget);
   if (!options.pictures) return figures;
   const ProxyPictureStage stage(mesh, options.picture_options);
   figures.mesh_shadow_png = encode_png(stage.mesh_shadow());

@@ -53,6 +53,8 @@ nlohmann::json report_recommendation_json(const ReportFigures& figures, const nl
 struct ReportOptions {
   bool pictures = true;  ///< render the pictures (a few seconds for a folder of ten proxies)
   ProxyPictureOptions picture_options;
+  /// Recommend only proxies of at most this many primitives (0: any), as recommend_proxies.
+  std::size_t budget = 0;
 };
 
 /// The recommendation and the pictures of every proxy of FOLDER. `mesh` is the mesh the
