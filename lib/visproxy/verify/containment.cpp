@@ -356,13 +356,12 @@ bool box_holds(const BoundingBox& outer, const BoundingBox& inner) {
 }
 
 // The triangles of `touching` (contents triangles, each with the container triangles it
-// meets) that lie in no convex part of the container: first, for each part a triangle
-// touches first, all such triangles' corners at once (their extreme points); then, for
-// those left, each triangle's corners against every convex part whose box holds it.
+// meets) that lie in no convex part of the container (`parts`): first, for each part a
+// triangle touches first, all such triangles' corners at once (their extreme points); then,
+// for those left, each triangle's corners against every convex part whose box holds it.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> outside_convex_parts(
-    const TriangleMesh& container, const Triangles& container_triangles, const TriangleMesh& contents,
-    const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossings, std::size_t& proved) {
-  ConvexParts parts(container, container_triangles);
+    ConvexParts& parts, const TriangleMesh& contents, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& crossings,
+    std::size_t& proved) {
   // Contents triangle -> first container triangle it meets (crossings are sorted by
   // container triangle, so take the lowest per contents triangle).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> first;  // (contents, container)
@@ -657,14 +656,16 @@ Containment check_containment(const TriangleMesh& container, const TriangleMesh&
   // its side of every face plane, and a contents triangle whose corners are all in it lies
   // in it; a triangle meets the surface exactly when a corner lies on it. One scan of the
   // planes over the points, no ray and no pair of triangles.
+  // The container's parts, made once for this and for the general path's convex parts.
+  const Triangles container_triangles = options.contents_solid ? Triangles{} : triangles_of(container);
+  std::optional<ConvexParts> parts;
   if (!options.contents_solid) {
-    const Triangles container_triangles = triangles_of(container);
-    ConvexParts parts(container, container_triangles);
-    if (parts.count() == 1 && parts.convex(0)) {
+    parts.emplace(container, container_triangles);
+    if (parts->count() == 1 && parts->convex(0)) {
       std::vector<Point> located;
       located.reserve(points.size());
       for (const Vertex& p : points) located.push_back(to_point(p));
-      const std::vector<std::uint8_t> marks = PlaneScan(parts.planes(0), located).classify();
+      const std::vector<std::uint8_t> marks = PlaneScan(parts->planes(0), located).classify();
       const bool all_held = std::none_of(marks.begin(), marks.end(), [](std::uint8_t m) { return m & PlaneScan::kBeyond; });
       // A vertex outside: the general path below finds it again, with the triangles that
       // cross the surface and a pair to show (a failed proof may take longer).
@@ -717,7 +718,7 @@ Containment check_containment(const TriangleMesh& container, const TriangleMesh&
   }
   if (!crossings.empty()) {
     const std::vector<std::pair<std::uint32_t, std::uint32_t>> unproved =
-        outside_convex_parts(container, triangles_of(container), contents, crossings, result.triangles_in_convex_parts);
+        outside_convex_parts(*parts, contents, crossings, result.triangles_in_convex_parts);
     result.triangles_unproved = unproved.size();
     if (!unproved.empty()) result.first_unproved = unproved.front();
   }
