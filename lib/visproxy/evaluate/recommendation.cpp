@@ -30,19 +30,6 @@ std::string rays_text(const json& rays) {
   return count + " isotropic lines through the mesh's bounding sphere";
 }
 
-// "For shadow rays through the control variate", "For the exact answer through bounds".
-std::string use_phrase(ProxyUse use) {
-  switch (use) {
-    case ProxyUse::control_variate:
-      return "For shadow rays through the control variate";
-    case ProxyUse::term_choice:
-      return "For shadow rays through eq. 8";
-    case ProxyUse::bounds:
-      return "For exact shadow rays through bounds";
-  }
-  return "?";
-}
-
 std::string choice_sentence(const Recommendation& r, std::size_t u, int best, int next) {
   const ProxyUse use = kProxyUses[u];
   std::string text = use_phrase(use);
@@ -77,6 +64,18 @@ std::string choice_sentence(const Recommendation& r, std::size_t u, int best, in
 }
 
 }  // namespace
+
+std::string use_phrase(ProxyUse use) {
+  switch (use) {
+    case ProxyUse::control_variate:
+      return "For shadow rays through the control variate";
+    case ProxyUse::term_choice:
+      return "For shadow rays through eq. 8";
+    case ProxyUse::bounds:
+      return "For exact shadow rays through bounds";
+  }
+  return "?";
+}
 
 Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_kind, std::size_t budget) {
   Recommendation r;

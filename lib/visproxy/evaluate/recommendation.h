@@ -51,6 +51,10 @@ struct Recommendation {
   std::array<UseChoice, 3> choices;      ///< in the order of kProxyUses
 };
 
+/// How a sentence about a use begins: "For shadow rays through the control variate", "For
+/// shadow rays through eq. 8", "For exact shadow rays through bounds".
+std::string use_phrase(ProxyUse use);
+
 /// Decides the kind proved for a manifest entry (from its verify object and the files).
 using ProvedKind = std::function<ProxyKind(const nlohmann::json& entry)>;
 

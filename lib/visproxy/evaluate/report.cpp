@@ -467,9 +467,7 @@ std::vector<ShippingLine> shipping_lines(const ReportFigures& figures, const jso
   const Recommendation& r = figures.recommendation;
   for (std::size_t u = 0; u < r.choices.size(); ++u) {
     const UseChoice& choice = r.choices[u];
-    const std::string use = choice.use == ProxyUse::control_variate ? "For shadow rays through the control variate"
-                            : choice.use == ProxyUse::term_choice   ? "For shadow rays through eq. 8"
-                                                                    : "For exact shadows through bounds";
+    const std::string use = use_phrase(choice.use);
     ShippingLine line{std::string(use_key(choice.use)), "", ""};
     const ProxyEfficiency* p = choice.best >= 0 ? &r.proxies[static_cast<std::size_t>(choice.best)] : nullptr;
     const UseFigures* f = p ? &p->uses[u] : nullptr;

@@ -34,7 +34,7 @@ struct ReportFigures {
   ProxyPictureOptions picture_options;
 };
 
-/// One line per use in shipping terms, the report's first: "For exact shadows through
+/// One line per use in shipping terms, the report's first: "For exact shadow rays through
 /// bounds, ship obb.ply (1 box) beside the mesh: shadow rays are predicted 1.06x [1.02,
 /// 1.09] cheaper, the shadows unchanged (cast on its own, it would miss 0.0 % of the
 /// mesh's shadow and add 31.2 %)." or "..., keep the mesh: no proxy is shown cheaper than
