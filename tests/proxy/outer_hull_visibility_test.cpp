@@ -2,8 +2,6 @@
 // f_miss = (#lines missing the mesh and the proxy) / (#lines missing the mesh).
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 
 #include "visproxy/measure/proportion.h"
@@ -11,6 +9,7 @@
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/outer_hull.h"
 #include "proxy/outside_proxy_checks.h"
+#include "cgal_hull.h"
 #include "test_meshes.h"
 #include "test_support.h"
 #include "visproxy/trace/ray_scene.h"
@@ -18,25 +17,7 @@
 namespace visproxy {
 namespace {
 
-TriangleMesh convex_hull(const TriangleMesh& mesh) {
-  using Point = testing::CheckKernel::Point_3;
-  std::vector<Point> points;
-  for (const Vertex& p : mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
-  CGAL::Surface_mesh<Point> hull;
-  CGAL::convex_hull_3(points.begin(), points.end(), hull);
-  TriangleMesh result;
-  for (const auto v : hull.vertices()) {
-    const Point& p = hull.point(v);
-    result.positions.emplace_back(p.x(), p.y(), p.z());
-  }
-  for (const auto f : hull.faces()) {
-    Triangle t{};
-    std::size_t i = 0;
-    for (const auto v : hull.vertices_around_face(hull.halfedge(f))) t[i++] = static_cast<VertexIndex>(v.idx());
-    result.triangles.push_back(t);
-  }
-  return result;
-}
+using testing::cgal_convex_hull;
 
 Proportion miss_fraction(const std::vector<std::uint8_t>& mesh_blocked, const TriangleMesh& proxy,
                          const std::vector<Segment>& lines) {
@@ -64,7 +45,7 @@ TEST_P(OuterHullVisibility, Outer512MissesFarMoreLinesThanTheConvexHull) {
   const std::vector<Segment> lines = isotropic_lines(bounding_sphere(mesh), 100000, 20240601);
   const std::vector<std::uint8_t> mesh_blocked = RayScene(mesh).segments_blocked(lines);
   const Proportion outer_miss = miss_fraction(mesh_blocked, outer.mesh, lines);
-  const Proportion hull_miss = miss_fraction(mesh_blocked, convex_hull(mesh), lines);
+  const Proportion hull_miss = miss_fraction(mesh_blocked, cgal_convex_hull(mesh), lines);
   constexpr double z = 3.290527;  // 99.9 %
   EXPECT_GE(outer_miss.lower(z), 0.95) << "f_miss " << outer_miss.fraction();
   EXPECT_GT(outer_miss.lower(z), hull_miss.upper(z))

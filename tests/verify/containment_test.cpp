@@ -3,7 +3,6 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
-#include <CGAL/convex_hull_3.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/read_mesh.h"
+#include "cgal_hull.h"
 #include "test_meshes.h"
 
 namespace visproxy {
@@ -50,23 +50,7 @@ TriangleMesh torus(int u, int v, double scale = 1, const Vertex& offset = Vertex
   return mesh;
 }
 
-// CGAL's exact convex hull of the mesh's vertices, as a triangle mesh with outward faces.
-TriangleMesh hull_of(const TriangleMesh& mesh) {
-  using Point = CGAL::Exact_predicates_inexact_constructions_kernel::Point_3;
-  std::vector<Point> points;
-  for (const Vertex& p : mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
-  CGAL::Surface_mesh<Point> hull;
-  CGAL::convex_hull_3(points.begin(), points.end(), hull);
-  TriangleMesh result;
-  for (const auto v : hull.vertices()) result.positions.emplace_back(hull.point(v).x(), hull.point(v).y(), hull.point(v).z());
-  for (const auto f : hull.faces()) {
-    Triangle t{};
-    std::size_t i = 0;
-    for (const auto v : hull.vertices_around_face(hull.halfedge(f))) t[i++] = static_cast<VertexIndex>(v.idx());
-    result.triangles.push_back(t);
-  }
-  return result;
-}
+using testing::cgal_convex_hull;
 
 TEST(LocatePoints, CubeInsideOnBoundaryOutside) {
   const TriangleMesh cube = testing::unit_cube();
@@ -385,7 +369,7 @@ TEST(BeyondFacePlanes, AgreesWithEveryPlaneTestedOneByOne) {
     Vertex offset;
   };
   for (const Case& c : {Case{1, Vertex::Zero()}, Case{1e-3, Vertex(1e8, -3e7, 2e6)}, Case{1e-200, Vertex(1e-199, 0, 0)}}) {
-    const TriangleMesh hull = hull_of(torus(40, 16, c.scale, c.offset));
+    const TriangleMesh hull = cgal_convex_hull(torus(40, 16, c.scale, c.offset));
     ASSERT_GT(hull.triangles.size(), 300u);
     std::vector<Vertex> points = torus(40, 16, c.scale, c.offset).positions;
     Random random(7);
@@ -433,7 +417,7 @@ TEST(BeyondFacePlanes, AgreesWithEveryPlaneTestedOneByOne) {
 // still inside, but the triangles touching the hull are then unproved.
 TEST(CheckContainment, LargeConvexHullHoldsTheTorusItTouches) {
   const TriangleMesh mesh = torus(400, 100);
-  TriangleMesh hull = hull_of(mesh);
+  TriangleMesh hull = cgal_convex_hull(mesh);
   ASSERT_GT(hull.triangles.size(), 20000u);
   const Containment held = check_containment(hull, mesh);
   EXPECT_TRUE(held.contained());
