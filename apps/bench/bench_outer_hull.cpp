@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "surface_mesh.h"
 #include "visproxy/core/process.h"
 #include "visproxy/measure/proportion.h"
 #include "visproxy/measure/random_lines.h"
@@ -30,18 +31,7 @@ TriangleMesh convex_hull(const TriangleMesh& mesh) {
   for (const Vertex& p : mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
   CGAL::Surface_mesh<Kernel::Point_3> hull;
   CGAL::convex_hull_3(points.begin(), points.end(), hull);
-  TriangleMesh result;
-  for (const auto v : hull.vertices()) {
-    const auto& p = hull.point(v);
-    result.positions.emplace_back(p.x(), p.y(), p.z());
-  }
-  for (const auto f : hull.faces()) {
-    Triangle t{};
-    std::size_t i = 0;
-    for (const auto v : hull.vertices_around_face(hull.halfedge(f))) t[i++] = static_cast<VertexIndex>(v.idx());
-    result.triangles.push_back(t);
-  }
-  return result;
+  return bench::from_surface_mesh(hull);
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "surface_mesh.h"
 #include "visproxy/core/process.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/convex_hull.h"
@@ -57,25 +58,8 @@ TriangleMesh torus(int u, int v) {
   return mesh;
 }
 
-CgalMesh to_cgal(const TriangleMesh& mesh) {
-  CgalMesh result;
-  std::vector<CgalMesh::Vertex_index> vertices;
-  for (const Vertex& p : mesh.positions) vertices.push_back(result.add_vertex({p.x(), p.y(), p.z()}));
-  for (const Triangle& t : mesh.triangles) result.add_face(vertices[t[0]], vertices[t[1]], vertices[t[2]]);
-  return result;
-}
-
-TriangleMesh from_cgal(const CgalMesh& mesh) {
-  TriangleMesh result;
-  for (const auto v : mesh.vertices()) result.positions.emplace_back(mesh.point(v).x(), mesh.point(v).y(), mesh.point(v).z());
-  for (const auto f : mesh.faces()) {
-    Triangle t{};
-    std::size_t i = 0;
-    for (const auto v : mesh.vertices_around_face(mesh.halfedge(f))) t[i++] = static_cast<VertexIndex>(v.idx());
-    result.triangles.push_back(t);
-  }
-  return result;
-}
+CgalMesh to_cgal(const TriangleMesh& mesh) { return bench::to_surface_mesh<Kernel::Point_3>(mesh); }
+TriangleMesh from_cgal(const CgalMesh& mesh) { return bench::from_surface_mesh(mesh); }
 
 struct Range {
   double low = 1e300, high = 0;
