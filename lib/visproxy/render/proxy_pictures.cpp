@@ -66,8 +66,9 @@ struct ProxyPictureStage::Impl {
   }
 
   std::vector<Vertex> light_points() const {
+    // The square a b c e is the triangles (a, b, c) and (a, c, e): its sides are b - a and e - a.
     const auto& t = scene.lights.front().triangles;
-    const Vertex corner = t[0][0], u = t[0][1] - t[0][0], v = t[0][2] - t[0][0];
+    const Vertex corner = t[0][0], u = t[0][1] - t[0][0], v = t[1][2] - t[0][0];
     const int n = options.light_samples_per_side;
     std::vector<Vertex> points;
     for (int j = 0; j < n; ++j)
@@ -199,6 +200,20 @@ ProxyPictureStage::~ProxyPictureStage() = default;
 
 const Image& ProxyPictureStage::mesh_shadow() const { return impl_->mesh_shadow; }
 const std::vector<double>& ProxyPictureStage::mesh_light_fractions() const { return impl_->mesh_light; }
+
+nlohmann::json ProxyPictureStage::geometry() const {
+  const auto& t = impl_->scene.lights.front().triangles;
+  const auto point = [](const Vertex& p) { return nlohmann::json::array({p.x(), p.y(), p.z()}); };
+  return {{"size", impl_->options.size},
+          {"ground_height", impl_->ground_height},
+          {"ground_x0", impl_->ground_x0},
+          {"ground_z0", impl_->ground_z0},
+          {"ground_side", impl_->ground_side},
+          {"light_corner", point(t[0][0])},
+          {"light_u", point(t[0][1] - t[0][0])},
+          {"light_v", point(t[1][2] - t[0][0])},
+          {"light_samples_per_side", impl_->options.light_samples_per_side}};
+}
 
 namespace {
 

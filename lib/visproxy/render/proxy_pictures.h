@@ -17,6 +17,7 @@
 //    front, right and above, 2 x 2 rays a pixel.
 
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "visproxy/image/image.h"
@@ -61,6 +62,12 @@ class ProxyPictureStage {
   const Image& mesh_shadow() const;
   /// The fraction of the light each ground pixel sees past the mesh, row-major, top row first.
   const std::vector<double>& mesh_light_fractions() const;
+  /// Where everything is, for rebuilding the stage in another renderer:
+  /// {"size", "ground_height", "ground_x0", "ground_z0", "ground_side", "light_corner",
+  ///  "light_u", "light_v", "light_samples_per_side"}: pixel (x, y) looks at the ground point
+  /// (x0 + (x + 0.5) side / size, ground_height, z0 + (y + 0.5) side / size); the light is the
+  /// square corner + s u + t v, s and t in [0, 1], facing -y.
+  nlohmann::json geometry() const;
 
   /// The pictures of one proxy of the mesh (in the mesh's frame). A proxy marked proved is
   /// padded as RenderWorld pads it, so a proved outside proxy misses no shadow and a proved
