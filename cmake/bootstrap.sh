@@ -41,6 +41,17 @@ if [ -n "$missing" ]; then
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends $missing
 fi
 
+# The test suite checks exported glTF files with the Khronos glTF validator, an npm package:
+# Node.js and npm from Debian when the machine has none, the validator (pinned) into the build tree.
+if [ "$mode" = test ]; then
+  if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends nodejs npm
+  fi
+  if [ ! -f build/release/node/node_modules/gltf-validator/package.json ]; then
+    npm install --prefix build/release/node --no-audit --no-fund --no-save gltf-validator@2.0.0-dev.3.10
+  fi
+fi
+
 werror=OFF
 [ -n "${CI:-}" ] && werror=ON
 cmake --preset release -DVISPROXY_WARNINGS_AS_ERRORS=$werror

@@ -24,6 +24,7 @@
 #include "visproxy/evaluate/proxy_flags.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
+#include "visproxy/folder/asset_folder.h"
 #include "visproxy/folder/proxy_folder.h"
 
 namespace visproxy::cli {
@@ -85,6 +86,7 @@ struct BuildCommandOptions {
   std::filesystem::path folder;
   std::vector<std::string> proxies;
   bool per_component = false;
+  bool per_mesh = false;
   Weld weld = Weld::automatic;
   std::uint64_t seed = 1;
   std::size_t hausdorff_samples = 20000;
@@ -134,6 +136,41 @@ void print_table(const BuildCommandOptions& options, const ManifestMesh& mesh, c
                 options.gssa_lines, static_cast<unsigned long long>(options.seed));
 }
 
+// --per-mesh: every part of the asset into its own folder, one line per part.
+void build_per_mesh(const BuildCommandOptions& options, const std::vector<ProxySpec>& specs) {
+  const auto start = std::chrono::steady_clock::now();
+  BuildOptions build{.per_component = options.per_component,
+                     .hausdorff_samples = options.hausdorff_samples,
+                     .seed = options.seed,
+                     .on_start = {},
+                     .tets = options.tets,
+                     .gssa_lines = options.gssa_lines,
+                     .default_set = options.proxies.empty(),
+                     .on_skip = {}};
+  build.builders_at_once = options.builders_at_once;
+  std::optional<Progress> progress;
+  const nlohmann::json asset = build_asset_folder(
+      options.folder, options.mesh, options.weld, specs, build, [&](std::string_view part, std::size_t, std::size_t n) {
+        if (!progress) progress.emplace("visproxy build", n, options.progress);
+        progress->step("building the proxies of " + std::string(part));
+      });
+  progress.reset();
+  std::printf("visproxy build --per-mesh: %zu meshes of %s, each built once\n", asset["parts"].size(), options.mesh.string().c_str());
+  std::printf("%-32s %10s %10s %8s  %s\n", "mesh", "triangles", "instances", "proxies", "folder / problem");
+  std::size_t problems = 0;
+  for (const nlohmann::json& part : asset["parts"]) {
+    const bool built = part["problem"].is_null();
+    problems += built ? 0 : 1;
+    std::printf("%-32s %10zu %10zu %8zu  %s\n", part["name"].get<std::string>().c_str(), part["triangles"].get<std::size_t>(),
+                part["instances"].size(), part["proxies"].size(),
+                built ? (options.folder / part["name"].get<std::string>()).string().c_str() : part["problem"].get<std::string>().c_str());
+    if (!built) std::cerr << "visproxy build: " << part["name"].get<std::string>() << " not built: " << part["problem"].get<std::string>() << "\n";
+  }
+  std::printf("%zu of %zu meshes built, %.2f s in all. Listed in %s\n", asset["parts"].size() - problems, asset["parts"].size(),
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+              (options.folder / "asset.json").string().c_str());
+}
+
 }  // namespace
 
 void add_build_command(CLI::App& app, int& exit_code) {
@@ -153,6 +190,11 @@ void add_build_command(CLI::App& app, int& exit_code) {
   add_progress_option(command, options->progress);
   command->add_flag("--per-component", options->per_component,
                     "Build one proxy per connected component (N applies to each) and join them in one file");
+  CLI::Option* per_mesh = command->add_flag(
+      "--per-mesh", options->per_mesh,
+      "A multi-mesh asset (glTF, FBX, ...): build the proxies of each of its meshes once, in its own coordinates, into "
+      "DIR/MESH/ (a proxy folder whose mesh is ASSET:MESH), and list the meshes with the nodes that show them in "
+      "DIR/asset.json (schema: data/schemas/asset.schema.json); 'export' puts each proxy under those nodes");
   as_choice<Weld>(command->add_option(
       "--weld", options->weld,
       "Merge vertices with identical coordinates: auto (STL and Assimp's formats only), never, always [default: auto]"));
@@ -187,7 +229,8 @@ void add_build_command(CLI::App& app, int& exit_code) {
       ->add_option("--time-limit", options->time_limit,
                    "Stop with exit code 3 and a line naming the builder or measure in progress once this many seconds "
                    "have passed, writing nothing [default: no limit]")
-      ->check(CLI::Range(0.001, 1.0e9));
+      ->check(CLI::Range(0.001, 1.0e9))
+      ->excludes(per_mesh);
 
   command->callback([options, &exit_code] {
     const auto start = std::chrono::steady_clock::now();
@@ -199,6 +242,11 @@ void add_build_command(CLI::App& app, int& exit_code) {
     // Specs are checked before anything is read or built.
     const std::vector<ProxySpec> specs =
         options->proxies.empty() ? default_proxy_specs() : parse_proxy_specs(options->proxies);
+    if (options->per_mesh) {
+      build_per_mesh(*options, specs);
+      exit_code = kSuccess;
+      return;
+    }
     Watchdog watchdog(options->time_limit, options->mesh);
     const TriangleMesh mesh = [&] {
       try {

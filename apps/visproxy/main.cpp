@@ -110,6 +110,7 @@ int main(int argc, char** argv) {
   add_verify_command(app, exit_code);
   add_measure_command(app, exit_code);
   add_report_command(app, exit_code);
+  add_export_command(app, exit_code);
   add_render_command(app, exit_code);
   add_generate_command(app, exit_code);
   add_compare_command(app, exit_code);

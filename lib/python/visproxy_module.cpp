@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "visproxy/asset/export_proxies.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
 #include "visproxy/core/version.h"
@@ -35,6 +36,7 @@
 #include "visproxy/render/scene_proxies.h"
 #include "visproxy/folder/verdict.h"
 #include "visproxy/inspect/mesh_report.h"
+#include "visproxy/render/proxy_pictures.h"
 #include "visproxy/mesh/read_mesh.h"
 #include "visproxy/mesh/write_mesh.h"
 #include "visproxy/proxy/build_proxies.h"
@@ -370,9 +372,78 @@ py::object write_folder_report(const std::filesystem::path& folder, const std::o
   return to_python(recommendation);
 }
 
+py::list export_folder(const std::filesystem::path& folder, const std::filesystem::path& output,
+                       const std::optional<std::vector<std::string>>& proxies, const std::optional<std::filesystem::path>& mesh) {
+  ExportResult result;
+  {
+    py::gil_scoped_release release;
+    result = export_proxies(folder, output, {.proxies = proxies.value_or(std::vector<std::string>{}), .source = mesh.value_or(std::filesystem::path())});
+  }
+  py::list out;
+  for (const ExportedProxy& proxy : result.proxies) {
+    const FloatProxy& g = proxy.geometry;
+    out.append(to_python(json{{"name", proxy.name},
+                              {"part", proxy.part},
+                              {"node", proxy.node},
+                              {"claimed", kind_name(g.claimed)},
+                              {"kind", kind_name(g.kind)},
+                              {"moved", g.moved},
+                              {"triangles", g.indices.size() / 3},
+                              {"note", g.note}}));
+  }
+  return out;
+}
+
 json mesh_manifest(const TriangleMesh& mesh) {
   const BoundingBox box = bounding_box(mesh);
   return {{"mesh", {{"bbox", {{"diagonal", box.diagonal()}}}}}};
+}
+
+py::dict float_proxy_arrays(py::handle vertices, py::handle triangles, py::handle proxy, const std::string& source) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  const HeldProxy held = held_proxy(proxy, 0);
+  FloatProxy rounded;
+  {
+    py::gil_scoped_release release;
+    rounded = round_proxy_to_float(mesh, mesh_manifest(mesh), held.entry, held.geometry, source);
+  }
+  py::array_t<float> points({static_cast<py::ssize_t>(rounded.positions.size() / 3), py::ssize_t{3}});
+  std::copy(rounded.positions.begin(), rounded.positions.end(), points.mutable_data());
+  py::dict out;
+  out["vertices"] = points;
+  out["triangles"] = triangle_array(rounded.mesh().triangles);
+  out["claimed"] = std::string(kind_name(rounded.claimed));
+  out["kind"] = std::string(kind_name(rounded.kind));
+  out["moved"] = rounded.moved;
+  out["verify"] = to_python(rounded.verify);
+  out["note"] = rounded.note;
+  return out;
+}
+
+py::dict shadow_stage_arrays(py::handle vertices, py::handle triangles, py::handle proxy, int size, const std::string& source) {
+  const TriangleMesh mesh = mesh_from_arrays(vertices, triangles, source);
+  if (size < 8 || size > 4096) throw py::value_error("size: must be from 8 to 4096");
+  std::optional<HeldProxy> held;
+  if (!proxy.is_none()) held = held_proxy(proxy, 0);
+  json stage;
+  std::optional<ProxyPictures> pictures;
+  {
+    py::gil_scoped_release release;
+    const ProxyPictureStage picture_stage(mesh, {.size = size});
+    stage = picture_stage.geometry();
+    if (held) {
+      const bool proved = held->entry["kind"] != "general" &&
+                          verify_proxy(mesh, mesh_manifest(mesh), held->entry, held->geometry).at("holds").get<bool>();
+      pictures = picture_stage.pictures(InstanceProxy{entry_kind(held->entry), held->entry.value("spec", std::string()),
+                                                      held->geometry.mesh, held->geometry.spheres, proved});
+    }
+  }
+  py::dict out = to_python(stage).cast<py::dict>();
+  if (pictures) {
+    out["missed_shadow"] = pictures->missed_shadow;
+    out["extra_shadow"] = pictures->extra_shadow;
+  }
+  return out;
 }
 
 py::list verify_arrays(py::handle vertices, py::handle triangles, py::handle proxies, std::size_t hausdorff_samples,
@@ -568,6 +639,25 @@ PYBIND11_MODULE(visproxy, m) {
         "each use (control_variate, eq8, bounds) the proxy with the best predicted efficiency against the mesh and its "
         "sentence, and every proxy's figures. `mesh`: the mesh the proxies were built from [default: the path the "
         "manifest records]. `budget`: recommend only proxies of at most this many primitives (0: any), as --budget.");
+  m.def("export", &export_folder, "folder"_a, "output"_a, py::kw_only(), "proxies"_a = py::none(), "mesh"_a = py::none(),
+        "Writes the proxies of a folder (or of a per-mesh folder) into `output` as 'visproxy export' does: .glb or .gltf "
+        "(the source asset with each proxy on a node of its own, extras.visproxy holding its claim), .obj or .ply (one "
+        "proxy); float32 positions with every outside or inside claim proved again on them. Returns one dict per "
+        "proxy: name, part, node, claimed and kept kind, moved (mesh units), triangles, note (why a claim was dropped). "
+        "`proxies`: names to export [default: all]; `mesh`: the asset [default: the path the folder records].");
+  m.def("float_proxy", &float_proxy_arrays, "vertices"_a, "triangles"_a, "proxy"_a, py::kw_only(), "source"_a = "mesh arrays",
+        "The proxy in float32, as a renderer or DCC tool stores it, with its claim proved again on the rounded "
+        "coordinates (as 'visproxy export' writes it): a dict with vertices (V, 3) float32, triangles (T, 3) int64, "
+        "claimed and kind (the kind kept: the claimed one when proved, else 'general'), moved (how far the vertices "
+        "were moved outward or inward before rounding, mesh units), verify (the verdict) and note (why a claim was "
+        "dropped). Sphere proxies become icospheres inside their spheres.");
+  m.def("shadow_stage", &shadow_stage_arrays, "vertices"_a, "triangles"_a, "proxy"_a = py::none(), py::kw_only(),
+        "size"_a = 192, "source"_a = "mesh arrays",
+        "The stage of the report's shadow pictures for this mesh (+y up): the ground plane's height, the pictured "
+        "square (ground_x0, ground_z0, ground_side; pixel (x, y) is centred at x0 + (x + 0.5) side / size, z0 + "
+        "(y + 0.5) side / size), the square area light (light_corner, light_u, light_v; it faces -y) and "
+        "light_samples_per_side. With a proxy: missed_shadow and extra_shadow, the fractions of the mesh's shadow "
+        "the proxy misses and adds there (a proxy whose claim verifies is padded as the renderer pads it).");
   m.def("disable_transparent_huge_pages", &visproxy::disable_transparent_huge_pages,
         "Turns transparent huge pages off for this process and those it starts, as the visproxy command does (unless "
         "the environment variable VISPROXY_TRANSPARENT_HUGE_PAGES is 1); returns whether they are now off. Embree "

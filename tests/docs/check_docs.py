@@ -40,8 +40,9 @@ What it checks (each problem is one line, FILE:LINE: what is wrong; exit code 1 
         module) and must exit 0.
     Each document runs in order, in a fresh temporary folder of its own, so an example
     may use what an earlier one in the same document wrote. The folder holds `data` (a
-    link to SRC/data) and `build/release/meshes` (a link to --mesh-dir, the libcgal-demo
-    meshes the build extracts), so the examples read as they run from the repository
+    link to SRC/data), `build/release/meshes` (a link to --mesh-dir, the libcgal-demo
+    meshes the build extracts) and `build/release/assimp-testmodels` (beside it, Debian's
+    assimp-testmodels the build unpacks), so the examples read as they run from the repository
     root after `sh cmake/bootstrap.sh demo`. XDG_CACHE_HOME points into the folder: every
     run builds its proxies afresh.
     Examples that must not run in a test (package installs, cluster submissions, long
@@ -323,6 +324,10 @@ def prepare_folder(source, visproxy, mesh_dir):
     if mesh_dir and os.path.isdir(mesh_dir):
         os.makedirs(os.path.join(folder, "build", "release"))
         os.symlink(mesh_dir, os.path.join(folder, "build", "release", "meshes"))
+        # Debian's assimp-testmodels, which the build unpacks beside the meshes.
+        models = os.path.join(os.path.dirname(mesh_dir), "assimp-testmodels")
+        if os.path.isdir(models):
+            os.symlink(models, os.path.join(folder, "build", "release", "assimp-testmodels"))
     os.makedirs(os.path.join(folder, ".docs", "bin"))
     os.symlink(visproxy, os.path.join(folder, ".docs", "bin", "visproxy"))
     return folder

@@ -235,6 +235,21 @@ def test_build_verify_and_measure_equal_the_cli_bit_for_bit(tmp_path, knot):
     assert recommendation["uses"]["bounds"]["proxy"] in ("aabb", "hull-32", "outer-64", "inside-10")
 
 
+def test_export_equals_the_cli_file_byte_for_byte_and_keeps_every_claim(tmp_path):
+    folder = tmp_path / "knot"
+    cli("build", KNOT, "-o", folder, "--proxy", "hull:32", "--proxy", "inside:10", "--proxy", "quadric:200",
+        "--hausdorff-samples", 500)
+    cli("export", folder, "-o", tmp_path / "cli.glb")
+    exported = vp.export(folder, tmp_path / "python.glb")
+    assert (tmp_path / "python.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+    assert [(p["name"], p["claimed"], p["kind"]) for p in exported] == [
+        ("hull-32", "outside", "outside"), ("inside-10", "inside", "inside"), ("quadric-200", "general", "general")]
+    assert all(p["note"] == "" and p["node"] == "knot1." + p["name"] for p in exported)
+    with pytest.raises(vp.InvalidInputError, match="lists no proxy named 'wrap'"):
+        vp.export(folder, tmp_path / "x.glb", proxies=["wrap"])
+    assert not (tmp_path / "x.glb").exists()
+
+
 def write_scene(path, mesh_path):
     scene = {
         "format": "visproxy-scene", "format_version": 1,

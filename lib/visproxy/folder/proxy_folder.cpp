@@ -76,6 +76,11 @@ void write_manifest(const std::filesystem::path& folder, const json& manifest) {
 TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& manifest,
                                 const WarningHandler& on_warning) {
   TriangleMesh mesh = read_mesh(path, {.weld = weld_of(manifest), .on_warning = on_warning});
+  check_manifest_mesh(mesh, path, manifest);
+  return mesh;
+}
+
+void check_manifest_mesh(const TriangleMesh& mesh, const std::filesystem::path& path, const json& manifest) {
   const json& described = manifest.at("mesh");
   const auto vertices = described.at("vertices").get<std::size_t>();
   const auto triangles = described.at("triangles").get<std::size_t>();
@@ -91,7 +96,6 @@ TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const json& m
     if (box.min[axis] != bbox.at("min").at(i).get<double>() || box.max[axis] != bbox.at("max").at(i).get<double>())
       throw InvalidInputError(path, "is not the mesh the proxies were built from (its bounding box differs from the manifest's)");
   }
-  return mesh;
 }
 
 ProxyKind entry_kind(const json& entry) {

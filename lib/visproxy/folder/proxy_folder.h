@@ -82,6 +82,9 @@ void write_manifest(const std::filesystem::path& folder, const nlohmann::json& m
 TriangleMesh read_manifest_mesh(const std::filesystem::path& path, const nlohmann::json& manifest,
                                 const WarningHandler& on_warning = {});
 
+/// The check of read_manifest_mesh alone, for a mesh read already (`path` names it in the error).
+void check_manifest_mesh(const TriangleMesh& mesh, const std::filesystem::path& path, const nlohmann::json& manifest);
+
 /// One proxy's geometry: triangles (boxes and meshes) or spheres.
 struct ProxyGeometry {
   PrimitiveType type = PrimitiveType::triangle;

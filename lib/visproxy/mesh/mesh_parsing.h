@@ -118,6 +118,12 @@ bool assimp_reads(const std::filesystem::path& path);
 /// can be started, `read` runs here.
 TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
                              const std::function<TriangleMesh()>& read);
+/// The same for any answer: runs `read` in the child and returns the bytes it made.
+std::string assimp_isolated_bytes(const std::filesystem::path& source, std::uint64_t input_bytes,
+                                  const std::function<std::string()>& read);
+/// The bytes of input a file counts for those limits: a .gltf's whole folder (its buffers
+/// and images lie beside it), else the file's size.
+std::uint64_t assimp_input_bytes(const std::filesystem::path& path);
 /// A file in a format Assimp reads, its nodes flattened into one mesh in world space.
 /// Reads from the file system, so that glTF's external buffers are found beside it.
 TriangleMesh read_assimp_file(const std::filesystem::path& path);

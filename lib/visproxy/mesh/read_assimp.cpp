@@ -179,8 +179,8 @@ void write_all(int fd, const std::string& bytes) {
 
 }  // namespace
 
-TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
-                             const std::function<TriangleMesh()>& read) {
+std::string assimp_isolated_bytes(const std::filesystem::path& source, std::uint64_t input_bytes,
+                                  const std::function<std::string()>& read) {
   const std::uint64_t allowance = memory_allowance(input_bytes);
   const rlim_t seconds = time_allowance(input_bytes);
   const std::uint64_t limit = address_space_in_use() + allowance;
@@ -205,7 +205,7 @@ TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t 
     ::setrlimit(RLIMIT_CORE, &no_core);
     std::string reply;
     try {
-      reply = "M" + encode(read());
+      reply = "M" + read();
     } catch (const InvalidInputError& error) {
       reply = "E" + error.problem();
     } catch (const std::bad_alloc&) {
@@ -243,10 +243,15 @@ TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t 
                                         " of memory to read it (set VISPROXY_ASSIMP_MEMORY_MB to allow more)");
   if (reply.starts_with("E")) throw InvalidInputError(source, reply.substr(1));
   if (!reply.starts_with("M")) throw InvalidInputError(source, "Assimp's reader ended without an answer");
-  return decode(reply.substr(1), source);
+  return reply.substr(1);
 }
 
-TriangleMesh read_assimp_file(const std::filesystem::path& path) {
+TriangleMesh assimp_isolated(const std::filesystem::path& source, std::uint64_t input_bytes,
+                             const std::function<TriangleMesh()>& read) {
+  return decode(assimp_isolated_bytes(source, input_bytes, [&] { return encode(read()); }), source);
+}
+
+std::uint64_t assimp_input_bytes(const std::filesystem::path& path) {
   // A .gltf's buffers and images lie beside it: count the folder's files as its input.
   std::uint64_t input_bytes = 0;
   std::error_code error;
@@ -256,7 +261,11 @@ TriangleMesh read_assimp_file(const std::filesystem::path& path) {
   } else {
     input_bytes = std::filesystem::file_size(path, error);
   }
-  return assimp_isolated(path, input_bytes, [&] {
+  return input_bytes;
+}
+
+TriangleMesh read_assimp_file(const std::filesystem::path& path) {
+  return assimp_isolated(path, assimp_input_bytes(path), [&] {
     Assimp::Importer importer;
     const aiScene* scene = importer.ReadFile(path.string(), kImportSteps);
     if (scene == nullptr) throw InvalidInputError(path, "Assimp cannot read it: " + one_line(importer.GetErrorString()));

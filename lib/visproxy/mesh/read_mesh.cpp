@@ -9,6 +9,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/mesh/asset_parts.h"
 #include "visproxy/mesh/mesh_parsing.h"
 
 namespace visproxy {
@@ -78,6 +79,17 @@ TriangleMesh parse_mesh(std::string_view bytes, MeshFormat format, const std::fi
 }
 
 TriangleMesh read_mesh(const std::filesystem::path& path, const ReadMeshOptions& options) {
+  std::error_code error;
+  if (const auto part = split_part_path(path); part && !std::filesystem::exists(path, error)) {
+    std::vector<AssetPart> parts = read_asset_parts(part->first, options.weld);
+    std::string names;
+    for (AssetPart& p : parts) {
+      if (p.name == part->second) return std::move(p.mesh);
+      if (names.size() < 300) names += (names.empty() ? "" : ", ") + p.name;
+    }
+    throw InvalidInputError(part->first, "holds no mesh named '" + part->second + "' (its meshes: " + names +
+                                             (names.size() >= 300 ? ", ..." : "") + ")");
+  }
   const std::optional<MeshFormat> format = format_from_extension(path);
   if (!format)
     throw InvalidInputError(path, "unknown mesh file extension " +

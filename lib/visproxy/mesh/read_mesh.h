@@ -41,7 +41,7 @@ struct ReadMeshOptions {
   /// header lines that are no PLY keyword ("FILE:LINE: unknown header line '...' ignored"),
   /// which Blender 2.4x writes. They are passed on once the header has been read, at most
   /// 8 of them and then one line counting the rest.
-  WarningHandler on_warning;
+  WarningHandler on_warning = {};
 };
 
 /// Reads a mesh, choosing the format from the extension.
