@@ -17,9 +17,10 @@ packages="build-essential cmake ninja-build ccache pkg-config
   libmeshoptimizer-dev libpng-dev libopenexr-dev
   python3-dev pybind11-dev python3-numpy libassimp-dev"
 # The test suite opens the HTML report in headless Chromium and runs the Python tests;
-# pip, venv and setuptools: the test that pip installs the module into a virtual environment.
+# pip, venv and setuptools: the test that pip installs the module into a virtual environment;
+# blender: the test of the Blender add-on (apps/blender), headless.
 if [ "$mode" = test ]; then
-  packages="$packages chromium python3-pil python3-pytest parallel python3-distributed python3-pip python3-venv python3-setuptools python3-wheel"
+  packages="$packages chromium python3-pil python3-pytest parallel python3-distributed python3-pip python3-venv python3-setuptools python3-wheel blender"
 fi
 
 missing=""
