@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "commands.h"
 #include "progress.h"
 #include "visproxy/evaluate/measure_proxies.h"
+#include "visproxy/folder/asset_folder.h"
 #include "visproxy/folder/proxy_folder.h"
 
 namespace visproxy::cli {
@@ -28,6 +30,72 @@ struct MeasureCommandOptions {
 
 double value(const nlohmann::json& m, const char* key) { return m[key]["value"].get<double>(); }
 
+// Measures every proxy of one proxy folder against the mesh at `mesh_path` (or `read`, an
+// asset's part read already), records it in the folder's manifest and prints the table.
+void measure_folder(const std::filesystem::path& mesh_path, const std::filesystem::path& folder,
+                    const MeasureCommandOptions& options, const TriangleMesh* read = nullptr) {
+  const auto start = std::chrono::steady_clock::now();
+  nlohmann::json manifest = read_manifest(folder);
+  TriangleMesh own;
+  if (read == nullptr)
+    own = read_manifest_mesh(mesh_path, manifest, print_warning);
+  else
+    check_manifest_mesh(*read, mesh_path, manifest);
+  const TriangleMesh& mesh = read == nullptr ? own : *read;
+  MeasureOptions measure{.rays = options.rays,
+                         .seed = options.seed,
+                         .scene = options.scene,
+                         .timing = {.rays = options.timed_rays},
+                         .on_start = {},
+                         .on_warning = print_warning};
+  {
+    Progress progress("visproxy measure", manifest["proxies"].size(), options.progress);
+    measure.on_start = [&progress](std::string_view name) { progress.step("measuring " + std::string(name)); };
+    manifest = measure_proxies(mesh, folder, std::move(manifest), measure);
+  }
+  write_manifest(folder, manifest);
+
+  const nlohmann::json& ray_set =
+      manifest["proxies"].empty() ? nlohmann::json::object() : manifest["proxies"][0]["measure"]["rays"];
+  if (options.scene.empty())
+    std::printf("visproxy measure: %zu proxies of %s on %zu isotropic lines (seed %llu) through its bounding sphere\n",
+                manifest["proxies"].size(), mesh_path.string().c_str(), options.rays,
+                static_cast<unsigned long long>(options.seed));
+  else
+    std::printf("visproxy measure: %zu proxies of %s on %zu shadow segments of %s (seed %llu)\n",
+                manifest["proxies"].size(), mesh_path.string().c_str(), ray_set.value("count", std::size_t{0}),
+                options.scene.string().c_str(), static_cast<unsigned long long>(options.seed));
+  std::printf("%-22s %-8s %8s %8s %8s %8s %-20s %9s %9s %9s %7s %-13s\n", "name", "kind", "f_hit", "f_miss", "V_avg",
+              "GSSA", "p1/p2/p3", "variance", "proxy ns", "mesh ns", "ratio", "ratio range");
+  for (const nlohmann::json& entry : manifest["proxies"]) {
+    const nlohmann::json& m = entry["measure"];
+    char probabilities[32];
+    std::snprintf(probabilities, sizeof probabilities, "%.3f/%.3f/%.3f", m["probabilities"]["p1"].get<double>(),
+                  m["probabilities"]["p2"].get<double>(), m["probabilities"]["p3"].get<double>());
+    const nlohmann::json& cost = m["cost_ns_per_ray"];
+    char range[40];
+    std::snprintf(range, sizeof range, "%.3f-%.3f", cost["proxy_over_mesh_range"][0].get<double>(),
+                  cost["proxy_over_mesh_range"][1].get<double>());
+    std::printf("%-22s %-8s %8.4f %8.4f %8.4f %8.4f %-20s %9.4f %9.1f %9.1f %7.3f %-13s\n",
+                entry["name"].get<std::string>().c_str(), entry["kind"].get<std::string>().c_str(), value(m, "f_hit"),
+                value(m, "f_miss"), value(m, "v_avg"), value(m, "gssa_ratio"), probabilities,
+                m["variance"]["optimal"].get<double>(), cost["proxy"].get<double>(), cost["mesh"].get<double>(),
+                cost["proxy_over_mesh"].get<double>(), range);
+    if (m["rays_contradicting_claim"].get<std::uint64_t>() > 0)
+      std::printf("  note: %llu rays contradict the %s claim; probabilities use the general form\n",
+                  static_cast<unsigned long long>(m["rays_contradicting_claim"].get<std::uint64_t>()),
+                  entry["kind"].get<std::string>().c_str());
+  }
+  std::printf(
+      "f_hit: blocked-by-mesh rays the proxy blocks; f_miss: free rays the proxy lets through; V_avg: free "
+      "rays; GSSA: proxy-blocked over mesh-blocked rays; p1/p2/p3 and variance: the estimator's optimal "
+      "probabilities and its variance per ray (Billen et al. eq. 16); ns: time per ray on one core over %zu "
+      "lines, the median of %d blocks that time the mesh and the proxy back to back; ratio: the median of "
+      "the blocks' proxy ns over mesh ns, and its range over them. Intervals in %s. (%.2f s in all)\n",
+      std::min(options.rays, options.timed_rays), TimingOptions{}.blocks, (folder / "manifest.json").string().c_str(),
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
 }  // namespace
 
 void add_measure_command(CLI::App& app, int& exit_code) {
@@ -39,7 +107,9 @@ void add_measure_command(CLI::App& app, int& exit_code) {
       "and the GSSA ratio with 95 % intervals, the estimator's optimal probabilities and variance, and the cost per "
       "ray of proxy and mesh on one core. With --scene, the rays are the scene's shadow segments instead.");
   command->add_option("mesh", options->mesh, "The mesh the proxies were built from")->required();
-  command->add_option("dir", options->folder, "Proxy folder written by 'visproxy build'")->required();
+  command
+      ->add_option("dir", options->folder, "Proxy folder written by 'visproxy build' (a per-mesh folder: each mesh's)")
+      ->required();
   command->add_option("--rays", options->rays, "Isotropic lines [default: 1000000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
   command->add_option("--seed", options->seed, "Seed of the lines [default: 1]");
@@ -47,64 +117,38 @@ void add_measure_command(CLI::App& app, int& exit_code) {
                       "Measure on a scene's shadow segments instead: from points its camera sees on other instances to "
                       "its lights, against every instance of MESH in it (--rays of them)");
   add_progress_option(command, options->progress);
-  command->add_option("--timed-rays", options->timed_rays, "Lines timed on one core for the cost per ray, in 6 blocks that time the mesh and the proxy back to back [default: 100000]")
+  command
+      ->add_option("--timed-rays", options->timed_rays,
+                   "Lines timed on one core for the cost per ray, in 6 blocks that time the mesh and the proxy back to "
+                   "back [default: 100000]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
 
   command->callback([options, &exit_code] {
-    const auto start = std::chrono::steady_clock::now();
-    nlohmann::json manifest = read_manifest(options->folder);
-    const TriangleMesh mesh = read_manifest_mesh(options->mesh, manifest, print_warning);
-    MeasureOptions measure{.rays = options->rays,
-                           .seed = options->seed,
-                           .scene = options->scene,
-                           .timing = {.rays = options->timed_rays},
-                           .on_start = {},
-                           .on_warning = print_warning};
-    {
-      Progress progress("visproxy measure", manifest["proxies"].size(), options->progress);
-      measure.on_start = [&progress](std::string_view name) { progress.step("measuring " + std::string(name)); };
-      manifest = measure_proxies(mesh, options->folder, std::move(manifest), measure);
+    if (is_asset_folder(options->folder)) {
+      // A per-mesh folder: each built mesh's folder against ASSET:MESH, each mesh read once.
+      if (!options->scene.empty())
+        throw OptionError("--scene", "measures the folder of one mesh, not a per-mesh folder");
+      const nlohmann::json asset = read_asset_manifest(options->folder);
+      const std::vector<AssetPart> parts = read_asset_parts(
+          options->mesh, find_choice<Weld>(asset["weld"].get<std::string>()).value_or(Weld::automatic));
+      std::size_t meshes = 0;
+      for (const nlohmann::json& part : asset["parts"]) {
+        if (part["folder"].is_null()) continue;
+        const std::string name = part["name"].get<std::string>();
+        const auto read = std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == name; });
+        if (read == parts.end())
+          throw InvalidInputError(options->mesh, "holds no mesh named '" + name + "' (built into " +
+                                                     (options->folder / name).string() + ")");
+        measure_folder(options->mesh.string() + ":" + name, options->folder / name, *options, &read->mesh);
+        ++meshes;
+        std::printf("\n");
+      }
+      std::printf("visproxy measure: the proxies of %zu meshes of %s measured\n", meshes,
+                  options->mesh.string().c_str());
+      exit_code = kSuccess;
+      return;
     }
-    write_manifest(options->folder, manifest);
-
-    const nlohmann::json& ray_set = manifest["proxies"].empty() ? nlohmann::json::object() : manifest["proxies"][0]["measure"]["rays"];
-    if (options->scene.empty())
-      std::printf("visproxy measure: %zu proxies of %s on %zu isotropic lines (seed %llu) through its bounding sphere\n",
-                  manifest["proxies"].size(), options->mesh.string().c_str(), options->rays,
-                  static_cast<unsigned long long>(options->seed));
-    else
-      std::printf("visproxy measure: %zu proxies of %s on %zu shadow segments of %s (seed %llu)\n", manifest["proxies"].size(),
-                  options->mesh.string().c_str(), ray_set.value("count", std::size_t{0}), options->scene.string().c_str(),
-                  static_cast<unsigned long long>(options->seed));
-    std::printf("%-22s %-8s %8s %8s %8s %8s %-20s %9s %9s %9s %7s %-13s\n", "name", "kind", "f_hit", "f_miss", "V_avg", "GSSA",
-                "p1/p2/p3", "variance", "proxy ns", "mesh ns", "ratio", "ratio range");
-    for (const nlohmann::json& entry : manifest["proxies"]) {
-      const nlohmann::json& m = entry["measure"];
-      char probabilities[32];
-      std::snprintf(probabilities, sizeof probabilities, "%.3f/%.3f/%.3f", m["probabilities"]["p1"].get<double>(),
-                    m["probabilities"]["p2"].get<double>(), m["probabilities"]["p3"].get<double>());
-      const nlohmann::json& cost = m["cost_ns_per_ray"];
-      char range[40];
-      std::snprintf(range, sizeof range, "%.3f-%.3f", cost["proxy_over_mesh_range"][0].get<double>(),
-                    cost["proxy_over_mesh_range"][1].get<double>());
-      std::printf("%-22s %-8s %8.4f %8.4f %8.4f %8.4f %-20s %9.4f %9.1f %9.1f %7.3f %-13s\n",
-                  entry["name"].get<std::string>().c_str(), entry["kind"].get<std::string>().c_str(), value(m, "f_hit"),
-                  value(m, "f_miss"), value(m, "v_avg"), value(m, "gssa_ratio"), probabilities,
-                  m["variance"]["optimal"].get<double>(), cost["proxy"].get<double>(), cost["mesh"].get<double>(),
-                  cost["proxy_over_mesh"].get<double>(), range);
-      if (m["rays_contradicting_claim"].get<std::uint64_t>() > 0)
-        std::printf("  note: %llu rays contradict the %s claim; probabilities use the general form\n",
-                    static_cast<unsigned long long>(m["rays_contradicting_claim"].get<std::uint64_t>()),
-                    entry["kind"].get<std::string>().c_str());
-    }
-    std::printf("f_hit: blocked-by-mesh rays the proxy blocks; f_miss: free rays the proxy lets through; V_avg: free "
-                "rays; GSSA: proxy-blocked over mesh-blocked rays; p1/p2/p3 and variance: the estimator's optimal "
-                "probabilities and its variance per ray (Billen et al. eq. 16); ns: time per ray on one core over %zu "
-                "lines, the median of %d blocks that time the mesh and the proxy back to back; ratio: the median of "
-                "the blocks' proxy ns over mesh ns, and its range over them. Intervals in %s. (%.2f s in all)\n",
-                std::min(options->rays, options->timed_rays), TimingOptions{}.blocks,
-                (options->folder / "manifest.json").string().c_str(),
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    measure_folder(options->mesh, options->folder, *options);
     exit_code = kSuccess;
   });
 }

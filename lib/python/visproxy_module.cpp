@@ -29,7 +29,9 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
 #include "visproxy/core/version.h"
+#include "visproxy/evaluate/asset_report.h"
 #include "visproxy/evaluate/batch.h"
+#include "visproxy/folder/asset_folder.h"
 #include "visproxy/evaluate/measure_proxies.h"
 #include "visproxy/folder/proxy_folder.h"
 #include "visproxy/evaluate/report.h"
@@ -359,13 +361,16 @@ py::object read_manifest_dict(const std::filesystem::path& folder) {
 py::object write_folder_report(const std::filesystem::path& folder, const std::optional<std::filesystem::path>& mesh,
                                bool pictures, int picture_size, std::size_t budget) {
   json recommendation;
-  {
+  const ReportOptions options{.pictures = pictures, .picture_options = {.size = picture_size}, .budget = budget};
+  if (is_asset_folder(folder)) {  // a per-mesh folder: each mesh's report and the asset's table
+    py::gil_scoped_release release;
+    recommendation = write_asset_report(folder, mesh.value_or(std::filesystem::path()), options);
+  } else {
     py::gil_scoped_release release;
     const json manifest = read_manifest(folder);
     const TriangleMesh read = read_manifest_mesh(mesh ? *mesh : std::filesystem::path(manifest["mesh"]["path"].get<std::string>()),
                                                  manifest);
-    const ReportFigures figures =
-        report_figures(read, folder, manifest, {.pictures = pictures, .picture_options = {.size = picture_size}, .budget = budget});
+    const ReportFigures figures = report_figures(read, folder, manifest, options);
     write_report(folder, manifest, figures);
     recommendation = report_recommendation_json(figures, manifest);
   }
@@ -638,7 +643,8 @@ PYBIND11_MODULE(visproxy, m) {
         "f_miss.svg, efficiency.svg and, with `pictures`, pictures/*.png) and returns the recommendation as a dict: for "
         "each use (control_variate, eq8, bounds) the proxy with the best predicted efficiency against the mesh and its "
         "sentence, and every proxy's figures. `mesh`: the mesh the proxies were built from [default: the path the "
-        "manifest records]. `budget`: recommend only proxies of at most this many primitives (0: any), as --budget.");
+        "manifest records]. `budget`: recommend only proxies of at most this many primitives (0: any), as --budget. A "
+        "per-mesh folder (build --per-mesh) gets each mesh's report and the asset's table, whose dict is returned.");
   m.def("export", &export_folder, "folder"_a, "output"_a, py::kw_only(), "proxies"_a = py::none(), "mesh"_a = py::none(),
         "Writes the proxies of a folder (or of a per-mesh folder) into `output` as 'visproxy export' does: .glb or .gltf "
         "(the source asset with each proxy on a node of its own, extras.visproxy holding its claim), .obj or .ply (one "

@@ -125,6 +125,34 @@ TEST_F(CliExport, PerMeshProxiesHangUnderEveryNodeThatShowsTheirMesh) {
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.err.find("holds no mesh named 'no_such_part'"), std::string::npos) << missing.err;
 
+  // measure and report go mesh by mesh too; the report has a row per mesh and a total.
+  const auto measured = testing::run_visproxy("measure '" + engine_.string() + "' '" + parts.string() +
+                                              "' --rays 2000 --timed-rays 500 --progress never");
+  ASSERT_EQ(measured.exit_code, 0) << measured.err;
+  EXPECT_NE(measured.out.find("the proxies of 29 meshes"), std::string::npos) << measured.out;
+  const auto reported = testing::run_visproxy("report '" + parts.string() + "' --no-pictures");
+  ASSERT_EQ(reported.exit_code, 0) << reported.err;
+  const json summary = json::parse(read_file(parts / "recommendation.json"));
+  ASSERT_EQ(summary.at("parts").size(), 29u);
+  const json summary_schema = testing::read_schema("asset-recommendation.schema.json");
+  testing::expect_described(summary, summary_schema, summary_schema, "recommendation.json");
+  std::size_t asset_triangles = 0;
+  for (const json& part : asset["parts"]) asset_triangles += part["instances"].size() * part["triangles"].get<std::size_t>();
+  EXPECT_EQ(summary.at("total").at("triangles"), asset_triangles);
+  for (const auto& [use, shipped] : summary.at("total").at("shipped_triangles").items()) {
+    std::size_t sum = 0;
+    for (const json& row : summary["parts"]) {
+      const json& choice = row["uses"][use];
+      sum += row["instances"].get<std::size_t>() * choice["triangles"].get<std::size_t>();
+      if (choice["file"].is_null()) EXPECT_EQ(choice["triangles"], row["triangles"]) << use;
+      else EXPECT_TRUE(std::filesystem::exists(parts / choice["file"].get<std::string>())) << choice["file"];
+    }
+    EXPECT_EQ(shipped.get<std::size_t>(), sum) << use;
+  }
+  const std::string report = read_file(parts / "report.md");
+  EXPECT_EQ(std::count(report.begin(), report.end(), '\n'), 4 + 2 + 29 + 1) << report;
+  EXPECT_TRUE(std::filesystem::exists(parts / "body_24" / "report.md"));
+
   const std::filesystem::path glb = folder_ / "engine-parts.glb";
   const auto exported = testing::run_visproxy("export '" + parts.string() + "' -o '" + glb.string() + "'");
   ASSERT_EQ(exported.exit_code, 0) << exported.err;

@@ -250,6 +250,21 @@ def test_export_equals_the_cli_file_byte_for_byte_and_keeps_every_claim(tmp_path
     assert not (tmp_path / "x.glb").exists()
 
 
+def test_report_of_a_per_mesh_folder_equals_the_cli_one(tmp_path):
+    engine = MESHES.parent / "assimp-testmodels/models/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"
+    if not engine.exists():
+        pytest.skip(f"{engine} is missing (Debian's assimp-testmodels)")
+    folder = tmp_path / "engine"
+    cli("build", engine, "-o", folder, "--per-mesh", "--proxy", "obb", "--proxy", "hull", "--hausdorff-samples", 200)
+    cli("measure", engine, folder, "--rays", 2000, "--timed-rays", 500)
+    cli("report", folder, "--no-pictures")
+    written = (folder / "recommendation.json").read_bytes()
+    summary = vp.report(folder, pictures=False)
+    assert (folder / "recommendation.json").read_bytes() == written
+    assert summary == json.loads(written)
+    assert len(summary["parts"]) == 29 and summary["total"]["triangles"] > 0
+
+
 def write_scene(path, mesh_path):
     scene = {
         "format": "visproxy-scene", "format_version": 1,
