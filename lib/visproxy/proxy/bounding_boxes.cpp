@@ -155,11 +155,22 @@ TriangleMesh box_mesh(const std::array<Vertex, 8>& corners) {
   return mesh;
 }
 
+double flat_box_half_thickness(double diagonal) { return std::ldexp(diagonal, -21); }
+
 TriangleMesh axis_aligned_box_mesh(const TriangleMesh& mesh) {
   const std::vector<Vertex> points = used_positions(mesh);
   if (points.empty()) throw InvalidInputError("", "the mesh has no triangles: a box needs at least one");
   if (!find_spanning_triangle(points)) throw InvalidInputError("", "all vertices are collinear: a box around them has no area");
-  const BoundingBox bounds = bounding_box(mesh);
+  BoundingBox bounds = bounding_box(mesh);
+  // A flat input (a card, a quad) gets a box of some thickness, so that the box bounds a
+  // solid the mesh lies strictly inside: two coincident faces bound nothing.
+  const double half_thickness = flat_box_half_thickness(bounds.diagonal());
+  for (int k = 0; k < 3; ++k)
+    if (bounds.max[k] - bounds.min[k] < 2 * half_thickness) {
+      const double middle = 0.5 * (bounds.min[k] + bounds.max[k]);
+      bounds.min[k] = std::min(bounds.min[k], middle - half_thickness);
+      bounds.max[k] = std::max(bounds.max[k], middle + half_thickness);
+    }
   std::array<Vertex, 8> corners;
   for (int i = 0; i < 8; ++i)
     for (int k = 0; k < 3; ++k) corners[static_cast<std::size_t>(i)][k] = ((i >> k) & 1) ? bounds.max[k] : bounds.min[k];
@@ -319,7 +330,8 @@ OrientedBoxResult build_oriented_box(const TriangleMesh& mesh, const OrientedBox
   // Corners are rounded: prove containment exactly and grow the box until it holds.
   const double diagonal = bounding_box(mesh).diagonal();
   result.inflation_world = 0;
-  const OrientedBox fitted = result.box;
+  OrientedBox fitted = result.box;
+  fitted.half_extents = fitted.half_extents.cwiseMax(flat_box_half_thickness(diagonal));
   for (int attempt = 0;; ++attempt) {
     result.box.half_extents = fitted.half_extents.array() + result.inflation_world;
     result.mesh = box_mesh(result.box.corners());
