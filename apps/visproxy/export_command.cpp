@@ -38,7 +38,8 @@ void add_export_command(CLI::App& app, int& exit_code) {
       "coordinates, after moving vertices outward (inward) by a few float ulps where rounding to nearest broke it; a "
       "claim that cannot be kept is exported as general and named. Sphere proxies are written as icospheres inside "
       "their spheres. Exits 0 when every claim of the folder is kept, 1 when one was dropped.");
-  command->add_option("dir", options->folder, "Proxy folder written by 'visproxy build' (with --per-mesh or without)")->required();
+  command->add_option("dir", options->folder, "Proxy folder written by 'visproxy build' (with --per-mesh or without)")
+      ->required();
   command->add_option("-o,--output", options->out, "The file to write: .glb, .gltf, .obj or .ply")->required();
   command->add_option("--mesh", options->mesh,
                       "The asset the proxies were built from [default: the path DIR/manifest.json records]");
@@ -55,10 +56,12 @@ void add_export_command(CLI::App& app, int& exit_code) {
                                                        name.get<std::string>()) != options->proxies.end();
     };
     if (is_asset_folder(options->folder)) {
-      for (const nlohmann::json& part : read_asset_manifest(options->folder)["parts"]) add(part["proxies"]);
+      const nlohmann::json listing = read_asset_manifest(options->folder);
+      for (const nlohmann::json& part : listing["parts"]) add(part["proxies"]);
     } else {
       nlohmann::json names = nlohmann::json::array();
-      for (const nlohmann::json& entry : read_manifest(options->folder)["proxies"]) names.push_back(entry["name"]);
+      const nlohmann::json manifest = read_manifest(options->folder);
+      for (const nlohmann::json& entry : manifest["proxies"]) names.push_back(entry["name"]);
       add(names);
     }
     Progress progress("visproxy export", count, options->progress);

@@ -137,15 +137,18 @@ TEST_F(CliExport, PerMeshProxiesHangUnderEveryNodeThatShowsTheirMesh) {
   const json summary_schema = testing::read_schema("asset-recommendation.schema.json");
   testing::expect_described(summary, summary_schema, summary_schema, "recommendation.json");
   std::size_t asset_triangles = 0;
-  for (const json& part : asset["parts"]) asset_triangles += part["instances"].size() * part["triangles"].get<std::size_t>();
+  for (const json& part : asset["parts"])
+    asset_triangles += part["instances"].size() * part["triangles"].get<std::size_t>();
   EXPECT_EQ(summary.at("total").at("triangles"), asset_triangles);
   for (const auto& [use, shipped] : summary.at("total").at("shipped_triangles").items()) {
     std::size_t sum = 0;
     for (const json& row : summary["parts"]) {
       const json& choice = row["uses"][use];
       sum += row["instances"].get<std::size_t>() * choice["triangles"].get<std::size_t>();
-      if (choice["file"].is_null()) EXPECT_EQ(choice["triangles"], row["triangles"]) << use;
-      else EXPECT_TRUE(std::filesystem::exists(parts / choice["file"].get<std::string>())) << choice["file"];
+      if (choice["file"].is_null())
+        EXPECT_EQ(choice["triangles"], row["triangles"]) << use;
+      else
+        EXPECT_TRUE(std::filesystem::exists(parts / choice["file"].get<std::string>())) << choice["file"];
     }
     EXPECT_EQ(shipped.get<std::size_t>(), sum) << use;
   }
@@ -173,11 +176,35 @@ TEST_F(CliExport, PerMeshProxiesHangUnderEveryNodeThatShowsTheirMesh) {
         EXPECT_EQ(extras.at("proved"), true);
       }
   EXPECT_EQ(proxy_children, 2 * instances);
-  if (!std::string(VISPROXY_NODE).empty() && std::filesystem::exists(std::filesystem::path(VISPROXY_NODE_MODULES) / "gltf-validator")) {
+  if (!std::string(VISPROXY_NODE).empty() &&
+      std::filesystem::exists(std::filesystem::path(VISPROXY_NODE_MODULES) / "gltf-validator")) {
     const auto verdict = validate("'" + glb.string() + "'");
     EXPECT_EQ(verdict.exit_code, 0) << verdict.out;
     EXPECT_NE(verdict.out.find("engine-parts.glb: 0 errors"), std::string::npos) << verdict.out;
   }
+}
+
+// Built again into the same folder from another asset, the old meshes' folders go and
+// files of the user's own stay.
+TEST_F(CliExport, RebuildingAPerMeshFolderRemovesTheMeshesItNoLongerLists) {
+  const std::filesystem::path parts = folder_ / "parts";
+  ASSERT_EQ(testing::run_visproxy("build '" + engine_.string() + "' -o '" + parts.string() +
+                                  "' --per-mesh --proxy obb --hausdorff-samples 200")
+                .exit_code,
+            0);
+  ASSERT_TRUE(std::filesystem::exists(parts / "body_24" / "manifest.json"));
+  write_file_atomically(parts / "notes.txt", "mine\n");
+  const std::filesystem::path box =
+      std::filesystem::path(VISPROXY_ASSIMP_MODEL_DIR) / "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb";
+  const auto rebuilt = testing::run_visproxy("build '" + box.string() + "' -o '" + parts.string() +
+                                             "' --per-mesh --proxy obb --hausdorff-samples 200");
+  ASSERT_EQ(rebuilt.exit_code, 0) << rebuilt.err;
+  const json asset = json::parse(read_file(parts / "asset.json"));
+  std::size_t folders = 0;
+  for (const auto& item : std::filesystem::directory_iterator(parts)) folders += item.is_directory();
+  EXPECT_EQ(folders, asset.at("parts").size());
+  EXPECT_FALSE(std::filesystem::exists(parts / "body_24"));
+  EXPECT_TRUE(std::filesystem::exists(parts / "notes.txt"));
 }
 
 TEST_F(CliExport, BadRequestsGetOneLineAndNoFile) {

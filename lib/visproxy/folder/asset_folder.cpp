@@ -1,5 +1,7 @@
 #include "visproxy/folder/asset_folder.h"
 
+#include <algorithm>
+
 #include "visproxy/core/files.h"
 #include "visproxy/core/json_input.h"
 #include "visproxy/core/version.h"
@@ -22,6 +24,17 @@ json build_asset_folder(const std::filesystem::path& folder, const std::filesyst
                         std::span<const ProxySpec> specs, const BuildOptions& options,
                         const std::function<void(std::string_view, std::size_t, std::size_t)>& on_part) {
   const std::vector<AssetPart> parts = read_asset_parts(asset, weld);
+  // The parts an earlier build listed here, whose folders go once the new listing is written.
+  std::vector<std::string> earlier;
+  if (is_asset_folder(folder)) {
+    try {
+      const json listing = read_asset_manifest(folder);
+      for (const json& part : listing.at("parts"))
+        if (!part.at("folder").is_null()) earlier.push_back(part.at("folder").get<std::string>());
+    } catch (const Error&) {
+      // An unreadable listing names no folders to remove.
+    }
+  }
   json entries = json::array();
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const AssetPart& part = parts[i];
@@ -55,6 +68,14 @@ json build_asset_folder(const std::filesystem::path& folder, const std::filesyst
       {"format", "visproxy-asset"}, {"format_version", 1},   {"generator", std::string("visproxy ") + version()},
       {"source", asset.string()},   {"weld", name_of(weld)}, {"parts", entries}};
   write_file_atomically(folder / kAssetFile, manifest.dump(2) + "\n");
+  for (const std::string& name : earlier) {
+    const bool listed =
+        std::any_of(entries.begin(), entries.end(), [&](const json& e) { return e.at("folder") == name; });
+    std::error_code error;  // only a proxy folder of a plain name inside this folder is removed
+    if (!listed && name.find('/') == std::string::npos && name.front() != '.' &&
+        std::filesystem::is_regular_file(folder / name / "manifest.json", error))
+      std::filesystem::remove_all(folder / name, error);
+  }
   return manifest;
 }
 

@@ -28,7 +28,8 @@ bool is_asset_folder(const std::filesystem::path& folder);
 /// where `transform` is world from part, 16 numbers row by row. A part whose build fails
 /// with InvalidInputError (inside:N of a part that is not closed) keeps its entry with the
 /// problem and no folder; the others are built. `on_part(name, i, n)` is called before
-/// each part. Returns asset.json's object.
+/// each part. Built again into a folder, the part folders the old asset.json listed and
+/// the new one does not are removed once it is written. Returns asset.json's object.
 nlohmann::json build_asset_folder(const std::filesystem::path& folder, const std::filesystem::path& asset, Weld weld,
                                   std::span<const ProxySpec> specs, const BuildOptions& options,
                                   const std::function<void(std::string_view, std::size_t, std::size_t)>& on_part = {});
