@@ -297,6 +297,24 @@ py::object inspect_arrays(py::handle vertices, py::handle triangles, const std::
   return to_python(report);
 }
 
+py::object build_asset_parts(const std::filesystem::path& asset, const std::filesystem::path& output,
+                             std::optional<std::vector<std::string>> specs_text, std::uint64_t seed, std::size_t hausdorff_samples,
+                             const std::string& weld) {
+  const std::vector<ProxySpec> specs = specs_text ? parse_proxy_specs(*specs_text) : default_proxy_specs();
+  if (hausdorff_samples < 100) throw py::value_error("hausdorff_samples: must be at least 100");
+  BuildOptions options;
+  options.hausdorff_samples = hausdorff_samples;
+  options.seed = seed;
+  options.default_set = !specs_text.has_value();
+  const Weld welded = parse_choice<Weld>("weld", weld);
+  json listing;
+  {
+    py::gil_scoped_release release;
+    listing = build_asset_folder(output, asset, welded, specs, options);
+  }
+  return to_python(listing);
+}
+
 py::list build_arrays(py::handle vertices, py::handle triangles, std::optional<std::vector<std::string>> specs_text,
                       std::uint64_t seed, bool per_component, std::size_t hausdorff_samples, const std::string& tets,
                       std::size_t gssa_lines, std::optional<std::filesystem::path> output, const std::string& source,
@@ -645,6 +663,11 @@ PYBIND11_MODULE(visproxy, m) {
         "sentence, and every proxy's figures. `mesh`: the mesh the proxies were built from [default: the path the "
         "manifest records]. `budget`: recommend only proxies of at most this many primitives (0: any), as --budget. A "
         "per-mesh folder (build --per-mesh) gets each mesh's report and the asset's table, whose dict is returned.");
+  m.def("build_asset", &build_asset_parts, "asset"_a, "output"_a, "specs"_a = py::none(), py::kw_only(), "seed"_a = 1,
+        "hausdorff_samples"_a = 20000, "weld"_a = "auto",
+        "Builds the proxies of each mesh of a multi-mesh asset once, as 'visproxy build ASSET --per-mesh -o OUTPUT' "
+        "does: OUTPUT/MESH/ per mesh and OUTPUT/asset.json, which is returned as a dict. verify, measure (the CLI), "
+        "report and export take the folder whole.");
   m.def("export", &export_folder, "folder"_a, "output"_a, py::kw_only(), "proxies"_a = py::none(), "mesh"_a = py::none(),
         "Writes the proxies of a folder (or of a per-mesh folder) into `output` as 'visproxy export' does: .glb or .gltf "
         "(the source asset with each proxy on a node of its own, extras.visproxy holding its claim), .obj or .ply (one "

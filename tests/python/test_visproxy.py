@@ -256,6 +256,12 @@ def test_report_of_a_per_mesh_folder_equals_the_cli_one(tmp_path):
         pytest.skip(f"{engine} is missing (Debian's assimp-testmodels)")
     folder = tmp_path / "engine"
     cli("build", engine, "-o", folder, "--per-mesh", "--proxy", "obb", "--proxy", "hull", "--hausdorff-samples", 200)
+    # Python builds the same folder: the same listing, and every proxy file byte for byte.
+    listing = vp.build_asset(engine, tmp_path / "python", ["obb", "hull"], hausdorff_samples=200)
+    assert listing == json.loads((folder / "asset.json").read_text())
+    for part in listing["parts"]:
+        for name in ("obb.ply", "hull.ply"):
+            assert (tmp_path / "python" / part["folder"] / name).read_bytes() == (folder / part["folder"] / name).read_bytes()
     cli("measure", engine, folder, "--rays", 2000, "--timed-rays", 500)
     cli("report", folder, "--no-pictures")
     written = (folder / "recommendation.json").read_bytes()
