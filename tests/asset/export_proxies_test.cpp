@@ -155,6 +155,11 @@ TEST_P(FloatExport, HullEditedByHandIsExportedAsGeneralWithTheReason) {
   EXPECT_EQ(proxy.kind, ProxyKind::general);
   EXPECT_NE(proxy.note.find("did not survive rounding"), std::string::npos) << proxy.note;
   EXPECT_NE(proxy.note.find("vertex"), std::string::npos) << proxy.note;
+  // The verdict kept is the one on the geometry exported (the nearest rounding).
+  EXPECT_FALSE(proxy.verify.at("holds").get<bool>());
+  ProxyGeometry exported;
+  exported.mesh = proxy.mesh();
+  EXPECT_EQ(proxy.verify.at("proxy_hash"), proxy_content_hash(exported));
 }
 
 INSTANTIATE_TEST_SUITE_P(Placements, FloatExport,

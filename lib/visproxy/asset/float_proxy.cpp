@@ -92,7 +92,8 @@ FloatProxy round_proxy_to_float(const TriangleMesh& mesh, const nlohmann::json& 
   // One float ulp at the largest magnitude (2^-23 of the power of two at or below it).
   const double ulp = magnitude > 0 ? std::ldexp(1.0, std::ilogb(magnitude) - 23) : std::numeric_limits<float>::min();
   const std::vector<float> nearest = out.positions;
-  std::string last_problem;
+  nlohmann::json nearest_verdict;  // the verdict on the geometry exported when no try holds
+  std::string problem;
   for (int attempt = 0; attempt <= 3; ++attempt) {
     const double distance = attempt == 0 ? 0.0 : ulp * std::ldexp(1.0, 2 * (attempt - 1));
     std::vector<float> positions = attempt == 0 ? nearest : rounded(triangles, normals, distance, sign);
@@ -107,15 +108,18 @@ FloatProxy round_proxy_to_float(const TriangleMesh& mesh, const nlohmann::json& 
       out.verify = std::move(verdict);
       return out;
     }
-    last_problem = verdict.contains("counterexample") && verdict["counterexample"].is_string()
-                       ? verdict["counterexample"].get<std::string>()
-                       : std::string("the claim does not hold");
-    out.verify = std::move(verdict);
+    if (attempt == 0) {  // the counterexample named is the exported geometry's
+      problem = verdict.contains("counterexample") && verdict["counterexample"].is_string()
+                         ? verdict["counterexample"].get<std::string>()
+                         : std::string("the claim does not hold");
+      nearest_verdict = std::move(verdict);
+    }
   }
   out.positions = nearest;
+  out.verify = std::move(nearest_verdict);
   out.kind = ProxyKind::general;
   out.note = "its " + std::string(kind_name(out.claimed)) + " claim did not survive rounding to float32 (" +
-             last_problem + "), so it is exported as general";
+             problem + "), so it is exported as general";
   return out;
 }
 

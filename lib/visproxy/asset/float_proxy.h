@@ -25,7 +25,9 @@ struct FloatProxy {
   /// for an outside claim and inward for an inside one: 0 when rounding to nearest kept the
   /// claim. Each coordinate is then rounded in the direction of that move.
   double moved = 0;
-  nlohmann::json verify;  ///< verify_proxy's verdict on the float geometry (null for general proxies)
+  /// verify_proxy's verdict on the float geometry exported (null for general proxies; the
+  /// failed verdict on the nearest rounding when the claim was dropped)
+  nlohmann::json verify;
   std::string note;       ///< why a claim was dropped, or empty
 
   /// The float geometry as a double mesh (every value exact).
