@@ -49,7 +49,8 @@ if [ "$mode" = test ]; then
     as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends nodejs npm
   fi
   if [ ! -f build/release/node/node_modules/gltf-validator/package.json ]; then
-    npm install --prefix build/release/node --no-audit --no-fund --no-save gltf-validator@2.0.0-dev.3.10
+    npm install --prefix build/release/node --no-audit --no-fund --no-save gltf-validator@2.0.0-dev.3.10 ||
+      echo "visproxy: warning: npm could not install gltf-validator; the test suite will report the glTF validation as skipped" >&2
   fi
 fi
 

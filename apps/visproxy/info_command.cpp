@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "visproxy/inspect/mesh_report.h"
+#include "visproxy/mesh/asset_parts.h"
 #include "visproxy/mesh/read_mesh.h"
 
 namespace visproxy::cli {
@@ -38,7 +39,11 @@ void print_report(const InfoOptions& options, MeshFormat format, double read_sec
   };
 
   std::string format_text(format_name(format));
-  if (format == MeshFormat::assimp) format_text += " " + options.mesh.extension().string().substr(1);
+  if (format == MeshFormat::assimp) {
+    const auto part = split_part_path(options.mesh);  // ASSET:MESH
+    format_text += " " + (part ? part->first : options.mesh).extension().string().substr(1);
+    if (part) format_text += ", its mesh " + part->second;
+  }
   std::printf("mesh %s (%s, read in %.1f ms)\n", options.mesh.string().c_str(), format_text.c_str(), 1e3 * read_seconds);
   row("vertices", count(report.vertices) +
                       (report.unreferenced_vertices ? " (" + count(report.unreferenced_vertices) + " unreferenced)" : ""));

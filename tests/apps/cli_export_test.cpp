@@ -121,6 +121,7 @@ TEST_F(CliExport, PerMeshProxiesHangUnderEveryNodeThatShowsTheirMesh) {
   const auto info = testing::run_visproxy("info '" + engine_.string() + ":body_24'");
   EXPECT_EQ(info.exit_code, 0) << info.err;
   EXPECT_NE(info.out.find("312"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("(Assimp glb, its mesh body_24,"), std::string::npos) << info.out;
   const auto missing = testing::run_visproxy("info '" + engine_.string() + ":no_such_part'");
   EXPECT_EQ(missing.exit_code, 2);
   EXPECT_NE(missing.err.find("holds no mesh named 'no_such_part'"), std::string::npos) << missing.err;

@@ -43,6 +43,7 @@ std::optional<MeshFormat> format_from_extension(const std::filesystem::path& pat
   if (extension == ".off") return MeshFormat::off;
   if (extension == ".stl") return MeshFormat::stl;
   if (parsing::assimp_reads(path)) return MeshFormat::assimp;
+  if (split_part_path(path)) return MeshFormat::assimp;  // ASSET:MESH, one mesh of an asset
   return std::nullopt;
 }
 

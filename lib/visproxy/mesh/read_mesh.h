@@ -23,7 +23,8 @@ enum class MeshFormat { obj, ply, off, stl, assimp };
 /// "OBJ", "PLY", "OFF", "STL" or "Assimp".
 std::string_view format_name(MeshFormat format);
 
-/// The format implied by a file's extension (case-insensitive), or nullopt if unknown.
+/// The format implied by a file's extension (case-insensitive), or nullopt if unknown;
+/// Assimp for "ASSET:MESH" (split_part_path), one mesh of an asset Assimp reads.
 std::optional<MeshFormat> format_from_extension(const std::filesystem::path& path);
 
 enum class Weld {
