@@ -31,16 +31,13 @@ struct MeasureCommandOptions {
 double value(const nlohmann::json& m, const char* key) { return m[key]["value"].get<double>(); }
 
 // Measures every proxy of one proxy folder against the mesh at `mesh_path` (or `read`, an
-// asset's part read already), records it in the folder's manifest and prints the table.
+// asset's part read and checked already by read_built_parts), records it in the folder's manifest and prints the table.
 void measure_folder(const std::filesystem::path& mesh_path, const std::filesystem::path& folder,
                     const MeasureCommandOptions& options, const TriangleMesh* read = nullptr) {
   const auto start = std::chrono::steady_clock::now();
   nlohmann::json manifest = read_manifest(folder);
   TriangleMesh own;
-  if (read == nullptr)
-    own = read_manifest_mesh(mesh_path, manifest, print_warning);
-  else
-    check_manifest_mesh(*read, mesh_path, manifest);
+  if (read == nullptr) own = read_manifest_mesh(mesh_path, manifest, print_warning);
   const TriangleMesh& mesh = read == nullptr ? own : *read;
   MeasureOptions measure{.rays = options.rays,
                          .seed = options.seed,
@@ -128,18 +125,9 @@ void add_measure_command(CLI::App& app, int& exit_code) {
       // A per-mesh folder: each built mesh's folder against ASSET:MESH, each mesh read once.
       if (!options->scene.empty())
         throw OptionError("--scene", "measures the folder of one mesh, not a per-mesh folder");
-      const nlohmann::json asset = read_asset_manifest(options->folder);
-      const std::vector<AssetPart> parts = read_asset_parts(
-          options->mesh, find_choice<Weld>(asset["weld"].get<std::string>()).value_or(Weld::automatic));
       std::size_t meshes = 0;
-      for (const nlohmann::json& part : asset["parts"]) {
-        if (part["folder"].is_null()) continue;
-        const std::string name = part["name"].get<std::string>();
-        const auto read = std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == name; });
-        if (read == parts.end())
-          throw InvalidInputError(options->mesh, "holds no mesh named '" + name + "' (built into " +
-                                                     (options->folder / name).string() + ")");
-        measure_folder(options->mesh.string() + ":" + name, options->folder / name, *options, &read->mesh);
+      for (const BuiltPart& part : read_built_parts(options->folder, options->mesh).parts) {
+        measure_folder(part.mesh_path, part.folder, *options, &part.mesh);
         ++meshes;
         std::printf("\n");
       }

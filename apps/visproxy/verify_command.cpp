@@ -38,15 +38,13 @@ struct Tally {
 
 // Verifies every proxy of one proxy folder against `mesh_path`, prints its table and
 // records the verdicts in its manifest.
-// `read`: the mesh, read already (an asset's part), or null to read it from `mesh_path`.
+// `read`: the mesh, read and checked against the manifest already (read_built_parts), or
+// null to read it from `mesh_path`.
 Tally verify_folder(const std::filesystem::path& mesh_path, const std::filesystem::path& folder,
                     const VerifyCommandOptions& options, const TriangleMesh* read = nullptr) {
   nlohmann::json manifest = read_manifest(folder);
   TriangleMesh own;
-  if (read == nullptr)
-    own = read_manifest_mesh(mesh_path, manifest, print_warning);
-  else
-    check_manifest_mesh(*read, mesh_path, manifest);
+  if (read == nullptr) own = read_manifest_mesh(mesh_path, manifest, print_warning);
   const TriangleMesh& mesh = read == nullptr ? own : *read;
   std::size_t failures = 0;
   std::printf("visproxy verify: %zu proxies in %s against %s (%zu triangles)\n", manifest["proxies"].size(),
@@ -110,20 +108,10 @@ void add_verify_command(CLI::App& app, int& exit_code) {
   command->callback([options, &exit_code] {
     if (is_asset_folder(options->folder)) {
       // A per-mesh folder: each built mesh's folder against ASSET:MESH, then the total.
-      const nlohmann::json asset = read_asset_manifest(options->folder);
-      const std::vector<AssetPart> parts = read_asset_parts(
-          options->mesh, find_choice<Weld>(asset["weld"].get<std::string>()).value_or(Weld::automatic));
       Tally total;
       std::size_t meshes = 0;
-      for (const nlohmann::json& part : asset["parts"]) {
-        if (part["folder"].is_null()) continue;
-        const std::string name = part["name"].get<std::string>();
-        const auto read = std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == name; });
-        if (read == parts.end())
-          throw InvalidInputError(options->mesh, "holds no mesh named '" + name + "' (built into " +
-                                                     (options->folder / name).string() + ")");
-        const Tally tally =
-            verify_folder(options->mesh.string() + ":" + name, options->folder / name, *options, &read->mesh);
+      for (const BuiltPart& part : read_built_parts(options->folder, options->mesh).parts) {
+        const Tally tally = verify_folder(part.mesh_path, part.folder, *options, &part.mesh);
         total.proxies += tally.proxies;
         total.failures += tally.failures;
         ++meshes;

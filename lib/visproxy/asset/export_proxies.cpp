@@ -173,23 +173,14 @@ ExportResult export_proxies(const std::filesystem::path& folder, const std::file
   result.path = out;
   result.format = export_format(out);
 
-  // The proxy folders: the folder itself, or each built part of an asset folder.
+  // The proxy folders: the folder itself, or each built part of an asset folder (its mesh
+  // read from the asset, which is read once).
   std::vector<Group> groups;
-  Weld parts_weld = Weld::automatic;
-  if (is_asset_folder(folder)) {
-    const json asset = read_asset_manifest(folder);
-    parts_weld = find_choice<Weld>(asset.value("weld", std::string("auto"))).value_or(Weld::automatic);
-    result.source =
-        options.source.empty() ? std::filesystem::path(asset.at("source").get<std::string>()) : options.source;
-    for (const json& part : asset.at("parts")) {
-      if (part.at("folder").is_null()) continue;
-      const std::string name = part.at("name").get<std::string>();
-      groups.push_back({.prefix = name,
-                        .folder = folder / name,
-                        .mesh_path = result.source.string() + ":" + name,
-                        .manifest = read_manifest(folder / name),
-                        .instances = part.at("instances")});
-    }
+  const bool per_part = is_asset_folder(folder);
+  if (per_part) {
+    result.source = options.source.empty()
+                        ? std::filesystem::path(read_asset_manifest(folder).at("source").get<std::string>())
+                        : options.source;
   } else {
     groups.push_back({.prefix = {}, .folder = folder, .manifest = read_manifest(folder)});
     result.source = options.source.empty()
@@ -200,8 +191,16 @@ ExportResult export_proxies(const std::filesystem::path& folder, const std::file
   }
   if (!std::filesystem::exists(result.source))
     throw InvalidInputError(
-        folder / (is_asset_folder(folder) ? "asset.json" : "manifest.json"),
+        folder / (per_part ? "asset.json" : "manifest.json"),
         "the mesh it was built from, " + result.source.string() + ", does not exist here (name it with --mesh)");
+  if (per_part)
+    for (BuiltPart& part : read_built_parts(folder, result.source).parts)
+      groups.push_back({.prefix = part.name,
+                        .folder = part.folder,
+                        .mesh_path = part.mesh_path,
+                        .manifest = std::move(part.manifest),
+                        .mesh = std::move(part.mesh),
+                        .instances = part.listing.at("instances")});
 
   // The proxies asked for, in each manifest's order; a name no folder lists is an error.
   std::set<std::string> known;
@@ -223,20 +222,9 @@ ExportResult export_proxies(const std::filesystem::path& folder, const std::file
     throw InvalidInputError(out, "a PLY file holds one mesh: choose one of the folder's " + std::to_string(count) +
                                      " proxies (--proxy NAME)");
 
-  // An asset's parts are read once, each checked against its folder's manifest.
-  std::vector<AssetPart> parts;
-  if (!groups.front().instances.is_null()) parts = read_asset_parts(result.source, parts_weld);
   for (Group& group : groups) {
     if (group.entries.empty()) continue;
-    if (group.instances.is_null()) {
-      group.mesh = read_manifest_mesh(group.mesh_path, group.manifest, options.on_warning);
-    } else {
-      const auto part =
-          std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == group.prefix; });
-      if (part == parts.end()) throw InvalidInputError(result.source, "holds no mesh named '" + group.prefix + "'");
-      check_manifest_mesh(part->mesh, group.mesh_path, group.manifest);
-      group.mesh = part->mesh;
-    }
+    if (!per_part) group.mesh = read_manifest_mesh(group.mesh_path, group.manifest, options.on_warning);
     group.first = result.proxies.size();
     for (const json& entry : group.entries) {
       const std::string name = entry.at("name").get<std::string>();

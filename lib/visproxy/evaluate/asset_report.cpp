@@ -18,32 +18,22 @@ using json = nlohmann::json;
 
 json write_asset_report(const std::filesystem::path& folder, const std::filesystem::path& asset,
                         const ReportOptions& options, const std::function<void(std::string_view)>& on_part) {
-  const json listing = read_asset_manifest(folder);
-  const std::filesystem::path source =
-      asset.empty() ? std::filesystem::path(listing.at("source").get<std::string>()) : asset;
-  const std::vector<AssetPart> parts =
-      read_asset_parts(source, find_choice<Weld>(listing.at("weld").get<std::string>()).value_or(Weld::automatic));
+  const BuiltParts built = read_built_parts(folder, asset);
+  const std::filesystem::path& source = built.source;
   std::array<std::string, 3> uses;
   for (std::size_t u = 0; u < kProxyUses.size(); ++u) uses[u] = use_key(kProxyUses[u]);
 
   json rows = json::array();
   std::size_t total = 0;
   std::array<std::size_t, 3> shipped{};
-  for (const json& part : listing.at("parts")) {
-    if (part.at("folder").is_null()) continue;
-    const std::string name = part.at("name").get<std::string>();
+  for (const BuiltPart& part : built.parts) {
+    const std::string& name = part.name;
     if (on_part) on_part(name);
-    const auto read = std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == name; });
-    if (read == parts.end())
-      throw InvalidInputError(source,
-                              "holds no mesh named '" + name + "' (built into " + (folder / name).string() + ")");
-    const std::filesystem::path part_folder = folder / name;
-    const json manifest = read_manifest(part_folder);
-    check_manifest_mesh(read->mesh, source.string() + ":" + name, manifest);
-    const ReportFigures figures = report_figures(read->mesh, part_folder, manifest, options);
-    write_report(part_folder, manifest, figures);
-    const std::size_t instances = part.at("instances").size();
-    const std::size_t triangles = read->mesh.triangles.size();
+    const json& manifest = part.manifest;
+    const ReportFigures figures = report_figures(part.mesh, part.folder, manifest, options);
+    write_report(part.folder, manifest, figures);
+    const std::size_t instances = part.listing.at("instances").size();
+    const std::size_t triangles = part.mesh.triangles.size();
     json row = {{"name", name}, {"instances", instances}, {"triangles", triangles}, {"uses", json::object()}};
     total += instances * triangles;
     const bool measured = !figures.recommendation.choices[0].sentence.empty();

@@ -118,6 +118,32 @@ json read_asset_manifest(const std::filesystem::path& folder) {
   return manifest;
 }
 
+BuiltParts read_built_parts(const std::filesystem::path& folder, const std::filesystem::path& asset) {
+  const json listing = read_asset_manifest(folder);
+  const std::filesystem::path source =
+      asset.empty() ? std::filesystem::path(listing.at("source").get<std::string>()) : asset;
+  std::vector<AssetPart> parts =
+      read_asset_parts(source, find_choice<Weld>(listing.at("weld").get<std::string>()).value_or(Weld::automatic));
+  BuiltParts built{.source = source, .parts = {}};
+  for (const json& part : listing.at("parts")) {
+    if (part.at("folder").is_null()) continue;
+    const std::string name = part.at("name").get<std::string>();
+    const auto read = std::find_if(parts.begin(), parts.end(), [&](const AssetPart& p) { return p.name == name; });
+    if (read == parts.end())
+      throw InvalidInputError(source,
+                              "holds no mesh named '" + name + "' (built into " + (folder / name).string() + ")");
+    BuiltPart entry{.listing = part,
+                    .name = name,
+                    .folder = folder / name,
+                    .mesh_path = source.string() + ":" + name,
+                    .manifest = read_manifest(folder / name),
+                    .mesh = std::move(read->mesh)};
+    check_manifest_mesh(entry.mesh, entry.mesh_path, entry.manifest);
+    built.parts.push_back(std::move(entry));
+  }
+  return built;
+}
+
 Eigen::Affine3d instance_transform(const json& instance) {
   Eigen::Matrix4d matrix;
   const json& t = instance.at("transform");

@@ -39,6 +39,28 @@ nlohmann::json build_asset_folder(const std::filesystem::path& folder, const std
 /// cannot be read and InvalidInputError naming it and the JSON path at fault otherwise.
 nlohmann::json read_asset_manifest(const std::filesystem::path& folder);
 
+/// One built mesh of a per-mesh folder, read from its asset.
+struct BuiltPart {
+  nlohmann::json listing;  ///< its entry in asset.json
+  std::string name;
+  std::filesystem::path folder;     ///< FOLDER/NAME
+  std::filesystem::path mesh_path;  ///< "ASSET:NAME", as its manifest records it
+  nlohmann::json manifest;          ///< FOLDER/NAME/manifest.json
+  TriangleMesh mesh;                ///< checked against the manifest (check_manifest_mesh)
+};
+
+struct BuiltParts {
+  std::filesystem::path source;  ///< the asset read
+  std::vector<BuiltPart> parts;
+};
+
+/// The built meshes of the per-mesh folder `folder` (those asset.json lists with a folder),
+/// in its order, the asset (`asset`, or asset.json's source when empty) read once with
+/// asset.json's welding. Throws InvalidInputError naming the asset when it holds no mesh of
+/// a listed name or one differs from its manifest, and what read_asset_parts and
+/// read_manifest throw.
+BuiltParts read_built_parts(const std::filesystem::path& folder, const std::filesystem::path& asset);
+
 /// An instance's transform as asset.json holds it (16 numbers, row by row).
 Eigen::Affine3d instance_transform(const nlohmann::json& instance);
 
