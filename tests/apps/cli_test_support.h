@@ -64,6 +64,22 @@ inline void expect_matches_schema(const nlohmann::json& manifest) {
     check(entry, entry_schema, entry.at("name").get<std::string>());
     for (const char* part : {"error", "verify", "measure"})
       if (entry.contains(part)) check(entry.at(part), entry_schema.at("properties").at(part), part);
+    if (entry.contains("measure")) {
+      const nlohmann::json& cost_schema = entry_schema.at("properties").at("measure").at("properties").at("cost_ns_per_ray");
+      const nlohmann::json& cost = entry.at("measure").at("cost_ns_per_ray");
+      for (const auto& key : cost_schema.at("required")) EXPECT_TRUE(cost.contains(key.get<std::string>())) << "cost." << key;
+      for (const auto& [key, value] : cost.items())
+        EXPECT_TRUE(cost_schema.at("properties").contains(key) ||
+                    cost_schema.at("required").dump().find('"' + key + '"') != std::string::npos)
+            << "cost_ns_per_ray." << key;
+      if (cost.contains("work")) check(cost.at("work"), s.at("$defs").at("work_per_ray"), "work");
+      if (cost.contains("predicted")) check(cost.at("predicted"), cost_schema.at("properties").at("predicted"), "predicted");
+    }
+  }
+  if (manifest.contains("cost_model")) {
+    check(manifest.at("cost_model"), s.at("properties").at("cost_model"), "cost_model");
+    if (manifest.at("cost_model").contains("ns"))
+      check(manifest.at("cost_model").at("ns"), s.at("properties").at("cost_model").at("properties").at("ns"), "cost_model.ns");
   }
 }
 

@@ -208,6 +208,40 @@ TEST(Recommendation, NoiseBetweenRunsDoesNotFlipTheChoice) {
   for (const UseChoice& choice : recommend_proxies(manifest, as_claimed()).choices) EXPECT_EQ(choice.best, 0) << choice.sentence;
 }
 
+// A proxy whose point estimate is highest but whose interval holds 1 (its cost is not
+// pinned down) does not hide one shown cheaper: the choice goes by the gain the interval
+// guarantees, so that a run where noise lifts the uncertain proxy's point does not turn
+// the advice into "trace the mesh" (armadillo's control variate flipped that way).
+TEST(Recommendation, AShownGainIsNotHiddenByAnUncertainHigherPoint) {
+  const std::array<std::uint64_t, 4> counts = {3000, 0, 400, 6600};
+  const json manifest = manifest_of({timed_entry("uncertain", counts, 10, 200, 0.02, 1.5, 40),
+                                     timed_entry("sure", counts, 40, 200, 0.19, 0.21, 400)});
+  const Recommendation r = recommend_proxies(manifest, as_claimed());
+  const std::size_t u = index_of(ProxyUse::bounds);
+  ASSERT_GT(r.proxies[0].uses[u].prediction.efficiency, r.proxies[1].uses[u].prediction.efficiency);
+  ASSERT_LT(r.proxies[0].uses[u].interval.lower, 1.0);
+  ASSERT_GT(r.proxies[1].uses[u].interval.lower, 1.0);
+  EXPECT_EQ(r.choices[u].best, 1) << r.choices[u].sentence;
+  EXPECT_NE(r.choices[u].sentence.find("sure is predicted"), std::string::npos) << r.choices[u].sentence;
+}
+
+// A run that fitted a cost model gives each proxy the model's interval of its cost ratio,
+// wider than its blocks': the recommendation reads that one, and the blocks' alone only
+// from manifests measured without a model.
+TEST(Recommendation, TheCostModelsIntervalIsTheOneRead) {
+  const std::array<std::uint64_t, 4> counts = {3000, 0, 400, 6600};
+  json blocks = timed_entry("a", counts, 20, 200, 0.095, 0.105, 12);
+  json modelled = blocks;
+  modelled["measure"]["cost_ns_per_ray"]["predicted"] = {{"proxy_over_mesh", 0.11}, {"interval", {0.06, 0.16}}};
+  const Recommendation rb = recommend_proxies(manifest_of({blocks}), as_claimed());
+  const UseFigures& b = rb.proxies[0].uses[index_of(ProxyUse::bounds)];
+  const Recommendation rm = recommend_proxies(manifest_of({modelled}), as_claimed());
+  const UseFigures& m = rm.proxies[0].uses[index_of(ProxyUse::bounds)];
+  EXPECT_DOUBLE_EQ(b.prediction.efficiency, m.prediction.efficiency);  // the point is the timed median
+  EXPECT_LT(m.interval.lower, b.interval.lower * 0.95);
+  EXPECT_GT(m.interval.upper, b.interval.upper * 1.05);
+}
+
 // A budget of primitives: a proxy over it is usable for no use, says why, keeps its row,
 // and the recommendation goes to the best one within the budget.
 TEST(Recommendation, ABudgetLeavesOutTheLargerProxies) {

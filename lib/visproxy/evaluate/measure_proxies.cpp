@@ -3,11 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "visproxy/core/errors.h"
 #include "visproxy/folder/proxy_folder.h"
+#include "visproxy/measure/cost_model.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/render/renderer.h"
 
@@ -52,12 +56,106 @@ double reach(const ProxyGeometry& geometry, const Vertex& center) {
 
 json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& options) {
   const Sphere sphere = bounding_sphere(mesh);
-  return {{"kind", "isotropic lines"},
-          {"description", "chords between two independent uniform points on the mesh's bounding sphere"},
-          {"count", options.rays},
-          {"seed", options.seed},
-          {"sphere", {{"center", {sphere.center.x(), sphere.center.y(), sphere.center.z()}}, {"radius", sphere.radius}}},
-          {"timed_rays", std::min(options.rays, options.timing.rays)}};
+  return {
+      {"kind", "isotropic lines"},
+      {"description", "chords between two independent uniform points on the mesh's bounding sphere"},
+      {"count", options.rays},
+      {"seed", options.seed},
+      {"sphere", {{"center", {sphere.center.x(), sphere.center.y(), sphere.center.z()}}, {"radius", sphere.radius}}},
+      {"timed_rays", std::min(options.rays, options.timing.rays)}};
+}
+
+namespace {
+
+json work_json(const WorkPerRay& work) {
+  return {{"nodes", work.nodes}, {"triangles", work.triangles}, {"balls", work.balls}};
+}
+
+// The cost model of the run (cost_model.h), fitted to the proxies' timings, and each
+// proxy's cost over the mesh's predicted from its counted work. The mesh is left out of the
+// fit and enters by its timed cost alone: it is timed in every block of every proxy, and
+// its BVH, unlike the proxies', does not stay in the caches, so the same constants do not
+// hold for it.
+//
+// The interval of a proxy's cost ratio is the prediction scaled by the model's error over
+// the run's proxies (the least and greatest timed / predicted ratio), joined with the
+// proxy's own block range: the cost of a geometry moves with the machine's state between
+// runs by more than between the blocks of one run, and how far the run's timings stray
+// from what their work predicts is a measure of that, taken from every proxy at once.
+// The point stays the proxy's timed median. Without enough timed proxies for a fit, the
+// manifest says why and the entries keep their block ranges alone.
+void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vector<WorkPerRay>& proxy_work) {
+  std::vector<CostObservation> observations;
+  std::vector<double> mesh_ns;
+  json& proxies = manifest.at("proxies");
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    const json& cost = proxies[i]["measure"]["cost_ns_per_ray"];
+    if (cost.value("proxy", 0.0) > 0) observations.push_back({proxy_work[i], cost.value("proxy", 0.0)});
+    if (cost.value("mesh", 0.0) > 0) mesh_ns.push_back(cost.value("mesh", 0.0));
+  }
+  const std::optional<CostModel> model = mesh_ns.empty() ? std::nullopt : fit_cost_model(observations);
+  if (!model) {
+    manifest["cost_model"] = {{"fitted", false},
+                              {"why_not", "fewer than " + std::to_string(kCostModelMinimumObservations) +
+                                              " timed proxies to fit four constants"}};
+    return;
+  }
+  std::sort(mesh_ns.begin(), mesh_ns.end());
+  const double mesh = mesh_ns[mesh_ns.size() / 2];
+  double low = std::numeric_limits<double>::infinity(), high = 0;
+  std::vector<double> predicted(proxies.size(), 0);
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    const json& cost = proxies[i]["measure"]["cost_ns_per_ray"];
+    predicted[i] = model->predict(proxy_work[i]) / mesh;
+    if (const double timed = cost.value("proxy_over_mesh", 0.0); timed > 0 && predicted[i] > 0) {
+      low = std::min(low, timed / predicted[i]);
+      high = std::max(high, timed / predicted[i]);
+    }
+  }
+  if (!(high > 0)) low = high = 1;
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    json& cost = proxies[i]["measure"]["cost_ns_per_ray"];
+    double range_low = predicted[i] * low, range_high = predicted[i] * high;
+    if (const auto blocks = cost.find("proxy_over_mesh_range"); blocks != cost.end() && blocks->size() == 2) {
+      range_low = std::min(range_low, blocks->at(0).get<double>());
+      range_high = std::max(range_high, blocks->at(1).get<double>());
+    }
+    cost["predicted"] = {{"proxy_over_mesh", predicted[i]}, {"interval", {range_low, range_high}}};
+  }
+  manifest["cost_model"] = {
+      {"fitted", true},
+      {"description",
+       "ns per ray = per_ray + per_node nodes + per_triangle triangles + per_ball balls, the work counted on the "
+       "timed rays (a binary BVH of the same primitives), fitted to this run's timings of the proxies by non-negative "
+       "least squares on relative errors; each proxy's cost_ns_per_ray.predicted is its prediction over the mesh's "
+       "timed cost, and the interval that prediction scaled by ratio_timed_over_predicted, joined with its block "
+       "range"},
+      {"ns",
+       {{"per_ray", model->per_ray},
+        {"per_node", model->per_node},
+        {"per_triangle", model->per_triangle},
+        {"per_ball", model->per_ball}}},
+      {"observations", model->observations},
+      {"timed_over_predicted", {model->residual_low, model->residual_high}},
+      {"ratio_timed_over_predicted", {low, high}},
+      {"mesh_ns_per_ray", mesh},
+      {"mesh_work", work_json(mesh_work)},
+      {"mesh_over_predicted", mesh / model->predict(mesh_work)}};
+}
+
+}  // namespace
+
+std::optional<std::array<double, 2>> cost_ratio_interval(const json& measure) {
+  if (!measure.is_object() || !measure.contains("cost_ns_per_ray")) return std::nullopt;
+  const json& cost = measure["cost_ns_per_ray"];
+  auto pair = [](const json& value) -> std::optional<std::array<double, 2>> {
+    if (!value.is_array() || value.size() != 2 || !value[0].is_number() || !value[1].is_number()) return std::nullopt;
+    return std::array<double, 2>{value[0].get<double>(), value[1].get<double>()};
+  };
+  if (cost.contains("predicted") && cost["predicted"].is_object() && cost["predicted"].contains("interval"))
+    if (auto interval = pair(cost["predicted"]["interval"])) return interval;
+  if (cost.contains("proxy_over_mesh_range")) return pair(cost["proxy_over_mesh_range"]);
+  return std::nullopt;
 }
 
 json measurement_json(const ProxyMeasurement& m) {
@@ -67,7 +165,9 @@ json measurement_json(const ProxyMeasurement& m) {
           {"f_miss", interval(m.f_miss)},
           {"v_avg", interval(m.v_avg)},
           {"gssa_ratio",
-           {{"value", m.gssa_ratio}, {"lower", m.gssa_ratio_lower}, {"upper", bounded ? json(m.gssa_ratio_upper) : json(nullptr)}}},
+           {{"value", m.gssa_ratio},
+            {"lower", m.gssa_ratio_lower},
+            {"upper", bounded ? json(m.gssa_ratio_upper) : json(nullptr)}}},
           {"probabilities",
            {{"form", kind_name(m.probability_form)}, {"p1", m.optimal.p1}, {"p2", m.optimal.p2}, {"p3", m.optimal.p3}}},
           {"variance", {{"optimal", m.variance_optimal}, {"equal", m.variance_equal}}},
@@ -84,10 +184,12 @@ json measurement_json(const ProxyMeasurement& m) {
 json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder, json manifest,
                      const MeasureOptions& options) {
   return measure_proxies(
-      mesh, std::move(manifest), [&](const json& entry, std::size_t) { return read_proxy_geometry(folder, entry); }, options);
+      mesh, std::move(manifest), [&](const json& entry, std::size_t) { return read_proxy_geometry(folder, entry); },
+      options);
 }
 
-json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometryReader& read, const MeasureOptions& options) {
+json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometryReader& read,
+                     const MeasureOptions& options) {
   // The mesh's instances in the scene (none: isotropic lines in the mesh's own frame).
   std::vector<Eigen::Affine3d> placements;
   std::vector<Segment> segments;
@@ -127,7 +229,8 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     std::vector<Sphere> placed;
     for (const Eigen::Affine3d& t : placements) {
       const std::optional<std::vector<Sphere>> balls = transformed_spheres(object, t);
-      if (!balls) throw InvalidInputError(options.scene, "sphere proxies need instances placed without shear or uneven scale");
+      if (!balls)
+        throw InvalidInputError(options.scene, "sphere proxies need instances placed without shear or uneven scale");
       placed.insert(placed.end(), balls->begin(), balls->end());
     }
     return placed;
@@ -139,30 +242,48 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   const Vertex center = placed_box.empty() ? Vertex::Zero() : Vertex(0.5 * (placed_box.min + placed_box.max));
   const RayScene mesh_scene(placed_mesh, center);
   const ReferenceRays reference = trace_reference(mesh_scene, std::move(segments), options.timing);
+  const bool timed = options.timing.rays > 0 && options.timing.blocks > 0;
+  const WorkPerRay mesh_work =
+      timed ? count_work(CountingBvh(placed_mesh), false, reference.rays, options.timing.rays) : WorkPerRay{};
+  std::vector<WorkPerRay> proxy_work;
   std::size_t index = 0;
   for (json& entry : manifest.at("proxies")) {
     if (options.on_start) options.on_start(entry.at("name").get<std::string>());
     const auto start = std::chrono::steady_clock::now();
     const ProxyGeometry geometry = read(entry, index++);
-    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere ? RayScene(place_spheres(geometry.spheres), center)
-                                                                        : RayScene(place_mesh(geometry.mesh), center);
+    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere
+                                     ? RayScene(place_spheres(geometry.spheres), center)
+                                     : RayScene(place_mesh(geometry.mesh), center);
     json proxy_rays = rays;
     ProxyMeasurement measurement;
-    if (const double radius = options.scene.empty() ? reach(geometry, line_sphere.center) : 0; radius > line_sphere.radius) {
+    // The work of the timed rays, counted against the same placed geometry.
+    auto work_on = [&](std::span<const Segment> traced) {
+      if (!timed) return WorkPerRay{};
+      const bool balls = geometry.type == PrimitiveType::sphere;
+      return balls ? count_work(CountingBvh(std::span<const Sphere>(place_spheres(geometry.spheres))), true, traced,
+                                options.timing.rays)
+                   : count_work(CountingBvh(place_mesh(geometry.mesh)), false, traced, options.timing.rays);
+    };
+    if (const double radius = options.scene.empty() ? reach(geometry, line_sphere.center) : 0;
+        radius > line_sphere.radius) {
       const ReferenceRays lines{.rays = lengthen_chords(reference.rays, line_sphere.center, radius),
                                 .mesh_blocked = reference.mesh_blocked,
                                 .mesh_ns_per_ray = reference.mesh_ns_per_ray,
                                 .mesh = reference.mesh};
       measurement = measure_proxy(lines, proxy_scene, entry_kind(entry), options.timing);
+      proxy_work.push_back(work_on(lines.rays));
       proxy_rays["proxy_sphere_radius"] = radius;
     } else {
       measurement = measure_proxy(reference, proxy_scene, entry_kind(entry), options.timing);
+      proxy_work.push_back(work_on(reference.rays));
     }
     json measured = measurement_json(measurement);
+    measured["cost_ns_per_ray"]["work"] = work_json(proxy_work.back());
     measured["rays"] = std::move(proxy_rays);
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     entry["measure"] = std::move(measured);
   }
+  if (timed) add_cost_model(manifest, mesh_work, proxy_work);
   return manifest;
 }
 

@@ -1,10 +1,12 @@
 #pragma once
 // `visproxy measure`: every proxy of a folder traced with the same seeded rays as the mesh.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string_view>
 
 #include "visproxy/core/errors.h"
@@ -37,8 +39,8 @@ nlohmann::json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& opti
 ///   {value, lower, upper} (95 %), probabilities {form, p1, p2, p3}, variance {optimal,
 ///   equal}, rays_contradicting_claim, cost_ns_per_ray {proxy, mesh, estimator,
 ///   proxy_over_mesh}, seconds.
-nlohmann::json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder,
-                               nlohmann::json manifest, const MeasureOptions& options = {});
+nlohmann::json measure_proxies(const TriangleMesh& mesh, const std::filesystem::path& folder, nlohmann::json manifest,
+                               const MeasureOptions& options = {});
 
 /// Gives the geometry of the manifest's entry `index` (its `entry`): for proxies held in
 /// memory rather than in a folder.
@@ -48,6 +50,12 @@ using ProxyGeometryReader = std::function<ProxyGeometry(const nlohmann::json& en
 /// its `name` and `kind`.
 nlohmann::json measure_proxies(const TriangleMesh& mesh, nlohmann::json manifest, const ProxyGeometryReader& read,
                                const MeasureOptions& options = {});
+
+/// The interval of a measured proxy's cost over the mesh's that its `measure` object
+/// gives: the cost model's (cost_ns_per_ray.predicted.interval) when the run fitted one,
+/// else the timing blocks' least and greatest ratio; none for a manifest measured before
+/// either was recorded. Every reader of a proxy's cost takes it from here.
+std::optional<std::array<double, 2>> cost_ratio_interval(const nlohmann::json& measure);
 
 /// The `measure` object of one measured proxy.
 nlohmann::json measurement_json(const ProxyMeasurement& measurement);

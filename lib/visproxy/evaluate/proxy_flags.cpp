@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <optional>
 
+#include "visproxy/evaluate/measure_proxies.h"
+
 namespace visproxy {
 namespace {
 
@@ -43,11 +45,7 @@ std::optional<Figures> figures_of(const json& entry) {
   if (!primitives || !f_hit || !f_miss || !cost) return std::nullopt;
   Figures f{entry.value("name", std::string("?")), entry.value("primitive_type", std::string()), entry.value("kind", std::string()),
             *primitives, *f_hit, *f_miss, *cost, *cost, false};
-  if (const auto range = entry["measure"]["cost_ns_per_ray"].find("proxy_over_mesh_range");
-      range != entry["measure"]["cost_ns_per_ray"].end() && range->is_array() && range->size() == 2) {
-    f.cost_low = range->at(0).get<double>();
-    f.cost_high = range->at(1).get<double>();
-  }
+  if (const auto interval = cost_ratio_interval(entry["measure"])) f.cost_low = (*interval)[0], f.cost_high = (*interval)[1];
   f.proved = f.kind != "general" && entry.contains("verify") && entry["verify"].is_object() && entry["verify"].value("holds", false);
   return f;
 }

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "visproxy/evaluate/measure_proxies.h"
+
 namespace visproxy {
 namespace {
 
@@ -95,11 +97,12 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     for (std::size_t i = 0; i < 4; ++i) counts.counts[i] = c.at(i).get<std::uint64_t>();
     const json& cost = measured.at("cost_ns_per_ray");
     TraceCosts costs{cost.value("proxy", 0.0), cost.value("mesh", 0.0)};
-    // The blocks' spread of the proxy's cost relative to the mesh's timed beside it
-    // (manifests measured before the blocks had none: the cost as measured).
-    if (const auto range = cost.find("proxy_over_mesh_range"); range != cost.end() && range->is_array() && range->size() == 2) {
-      costs.proxy_ns_low = range->at(0).get<double>() * costs.mesh_ns;
-      costs.proxy_ns_high = range->at(1).get<double>() * costs.mesh_ns;
+    // The interval of the proxy's cost relative to the mesh's: the run's cost model with
+    // its error, or the blocks' spread (manifests measured before either had none: the
+    // cost as measured).
+    if (const auto interval = cost_ratio_interval(measured)) {
+      costs.proxy_ns_low = (*interval)[0] * costs.mesh_ns;
+      costs.proxy_ns_high = (*interval)[1] * costs.mesh_ns;
     }
     const RayTypeFractions fractions = RayTypeFractions::from(counts);
     for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
@@ -116,24 +119,34 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     r.proxies.push_back(std::move(p));
   }
   for (std::size_t u = 0; u < kProxyUses.size(); ++u) {
-    // The most efficient usable proxy; then, when it is shown cheaper than the mesh, of
-    // the proxies also shown cheaper whose intervals reach its interval (not told apart
-    // from it), the one with the fewest primitives: a choice that noise in the timing
-    // cannot flip between proxies the intervals do not separate. When the most efficient
-    // is not shown cheaper, the advice is to trace the mesh, and it is the one named.
+    // Of the proxies shown cheaper than the mesh (interval above 1), the one whose interval
+    // reaches highest at its lower end: the gain it guarantees, which the timing's noise
+    // moves least. Then, of the proxies also shown cheaper whose intervals reach its
+    // interval (not told apart from it), the one with the fewest primitives: a choice
+    // that noise cannot flip between proxies the intervals do not separate. When no proxy
+    // is shown cheaper, the advice is to trace the mesh, and the most efficient is named.
+    auto shown_cheaper = [&](std::size_t i) {
+      const UseFigures& f = r.proxies[i].uses[u];
+      return f.prediction.usable && f.prediction.efficiency > 1 && f.interval.lower > 1;
+    };
     int top = -1;
-    for (std::size_t i = 0; i < r.proxies.size(); ++i) {
-      const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
-      if (candidate.usable && (top < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(top)].uses[u].prediction.efficiency))
+    for (std::size_t i = 0; i < r.proxies.size(); ++i)
+      if (shown_cheaper(i) && (top < 0 || r.proxies[i].uses[u].interval.lower >
+                                              r.proxies[static_cast<std::size_t>(top)].uses[u].interval.lower))
         top = static_cast<int>(i);
-    }
+    if (top < 0)
+      for (std::size_t i = 0; i < r.proxies.size(); ++i) {
+        const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
+        if (candidate.usable &&
+            (top < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(top)].uses[u].prediction.efficiency))
+          top = static_cast<int>(i);
+      }
     int best = top, next = -1;
     if (top >= 0) {
       const double reach = r.proxies[static_cast<std::size_t>(top)].uses[u].interval.lower;
-      for (std::size_t i = 0; i < r.proxies.size() && reach > 1; ++i) {
+      for (std::size_t i = 0; i < r.proxies.size() && shown_cheaper(static_cast<std::size_t>(top)); ++i) {
         const ProxyEfficiency& candidate = r.proxies[i];
-        const UseFigures& f = candidate.uses[u];
-        if (!f.prediction.usable || f.interval.upper < reach || !(f.prediction.efficiency > 1 && f.interval.lower > 1)) continue;
+        if (!shown_cheaper(i) || candidate.uses[u].interval.upper < reach) continue;
         if (candidate.primitives < r.proxies[static_cast<std::size_t>(best)].primitives) best = static_cast<int>(i);
       }
       // The runner-up: the most efficient other proxy.

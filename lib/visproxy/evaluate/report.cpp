@@ -9,6 +9,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/evaluate/measure_proxies.h"
 #include "visproxy/evaluate/plot.h"
 #include "visproxy/folder/proxy_folder.h"
 #include "visproxy/folder/verdict.h"
@@ -94,8 +95,9 @@ std::vector<Cell> row(const json& entry) {
   cells.push_back({std::isnan(variance) ? "—" : format("%.4f", variance), variance});
   const double cost = number(entry, {"measure", "cost_ns_per_ray", "proxy_over_mesh"});
   std::string cost_text = std::isnan(cost) ? "—" : format("%.3f", cost);
-  if (const json* range = find(entry, {"measure", "cost_ns_per_ray", "proxy_over_mesh_range"}); range && range->size() == 2)
-    cost_text += " (" + format("%.3f", (*range)[0].get<double>()) + "–" + format("%.3f", (*range)[1].get<double>()) + ")";
+  if (const json* measure = find(entry, {"measure"}))
+    if (const auto interval = cost_ratio_interval(*measure))
+      cost_text += " (" + format("%.3f", (*interval)[0]) + "–" + format("%.3f", (*interval)[1]) + ")";
   cells.push_back({cost_text, cost});
   return cells;
 }
