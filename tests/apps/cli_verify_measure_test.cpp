@@ -286,11 +286,47 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
     EXPECT_EQ(counts[1], 0u);     // outside proxies: nothing the bunny blocks gets past them
     EXPECT_GT(counts[0], 100u);   // the bunny does shadow part of the box
   }
-  // The recommendation is made on the scene's rays, and says so.
+  testing::expect_matches_schema(m);
+  // The share of a sample's time that the bunny's shadow tests take in this scene: what the
+  // render gains is Amdahl's part of what the shadow rays gain.
+  const json& share = m.at("render_share");
+  EXPECT_EQ(share.at("scene"), scene);
+  EXPECT_GT(share.at("share").get<double>(), 0.0);
+  EXPECT_LT(share.at("share").get<double>(), 1.0);
+  EXPECT_LE(std::max(share.at("width").get<int>(), share.at("height").get<int>()), 128);
+  EXPECT_NEAR(share.at("share").get<double>(),
+              share.at("shadow_rays_per_camera_sample").get<double>() * share.at("mesh_ns_per_shadow_ray").get<double>() /
+                  share.at("ns_per_camera_sample").get<double>(),
+              1e-9);
+  // The recommendation is made on the scene's rays, and says so, per shadow ray and per render
+  // (bounds rest on proved claims).
+  ASSERT_EQ(testing::run_visproxy("verify '" + bunny + "' '" + folder.string() + "'").exit_code, 0);
   const auto report = testing::run_visproxy("report '" + folder.string() + "' --no-pictures");
   ASSERT_EQ(report.exit_code, 0) << report.err;
   const json recommendation = json::parse(read_file(folder / "recommendation.json"));
   EXPECT_EQ(recommendation["rays"], "20000 shadow rays of the scene " + scene);
+  EXPECT_EQ(recommendation["render_share"]["share"], share.at("share"));
+  const json& bounds = recommendation["uses"]["bounds"];
+  ASSERT_TRUE(bounds.contains("render_efficiency")) << bounds.dump();
+  // Bounds leave the noise as it is: the render's figure is Amdahl's law of the ray's.
+  const double s = share.at("share").get<double>(), e = bounds["efficiency"].get<double>();
+  EXPECT_NEAR(bounds["render_efficiency"].get<double>(), 1 / ((1 - s) + s / e), 1e-9);
+  EXPECT_NE(bounds["sentence"].get<std::string>().find("over the render of " + scene + ", whose samples spend"),
+            std::string::npos)
+      << bounds["sentence"];
+  // Measured again on isotropic lines, the folder no longer claims a render share.
+  ASSERT_EQ(testing::run_visproxy("measure '" + bunny + "' '" + folder.string() + "' --rays 2000 --timed-rays 500").exit_code, 0);
+  EXPECT_FALSE(json::parse(read_file(folder / "manifest.json")).contains("render_share"));
+  ASSERT_EQ(testing::run_visproxy("report '" + folder.string() + "' --no-pictures").exit_code, 0);
+  const json isotropic = json::parse(read_file(folder / "recommendation.json"));
+  EXPECT_TRUE(isotropic["render_share"].is_null());
+  EXPECT_FALSE(isotropic["uses"]["bounds"].contains("render_efficiency"));
+  // Back on the scene for the checks below.
+  ASSERT_EQ(testing::run_visproxy("measure '" + bunny + "' '" + folder.string() + "' --scene '" + scene +
+                                  "' --rays 20000 --timed-rays 1000")
+                .exit_code,
+            0);
+  ASSERT_EQ(testing::run_visproxy("report '" + folder.string() + "' --no-pictures").exit_code, 0);
   EXPECT_NE(read_file(folder / "report.md").find("Predicted on 20000 shadow rays of the scene"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(folder / "pictures"));
   // The knot is not in the Cornell box.

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "visproxy/core/random.h"
@@ -229,6 +230,66 @@ TEST(Efficiency, TheIntervalNarrowsWithMoreRaysAndIsReproducible) {
   const Interval again = efficiency_interval(ProxyUse::control_variate, ProxyKind::general, small, kCosts, setting, 3);
   EXPECT_EQ(again.lower, a.lower);
   EXPECT_EQ(again.upper, a.upper);
+}
+
+TEST(RenderEfficiency, IsAmdahlsLawWithTheVarianceRatio) {
+  EXPECT_DOUBLE_EQ(render_efficiency(2.0, 1.0, 1.0), 2.0);           // all of a sample is the mesh's shadow test
+  EXPECT_DOUBLE_EQ(render_efficiency(2.0, 1.0, 0.5), 1 / (0.5 + 0.25));  // bounds: Amdahl
+  EXPECT_DOUBLE_EQ(render_efficiency(2.0, 1.0, 0.0), 1.0);           // shadow tests cost nothing: no gain
+  EXPECT_DOUBLE_EQ(render_efficiency(2.0, 1.5, 0.0), 1 / 1.5);       // ... and the noise still grows
+  EXPECT_DOUBLE_EQ(render_efficiency(0.5, 1.0, 0.2), 1 / (0.8 + 0.4));
+  EXPECT_DOUBLE_EQ(render_efficiency(2.0, 1.0, 7.0), 2.0);  // a share is clamped to [0, 1]
+  EXPECT_EQ(render_efficiency(0.0, 1.0, 0.5), 0.0);
+  EXPECT_EQ(render_efficiency(2.0, std::numeric_limits<double>::infinity(), 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(render_efficiency(std::numeric_limits<double>::infinity(), 1.0, 0.25), 1 / 0.75);
+  // A use that pays per ray pays less over the render, and more as the share grows.
+  double previous = render_efficiency(3.0, 1.2, 0.0);
+  EXPECT_LT(previous, 1.0);
+  for (double share = 0.1; share <= 1.0; share += 0.1) {
+    const double e = render_efficiency(3.0, 1.2, share);
+    EXPECT_GT(e, previous - 1e-12);
+    EXPECT_LE(e, 3.0 + 1e-12);
+    previous = e;
+  }
+}
+
+// A simulated render: each sample's value is X V, with X the rest of the sample's noise
+// (light sampling, 1 without any), V the visibility of its shadow ray, and its time the
+// rest of the sample plus the shadow test. With the control variate, V is replaced by its
+// unbiased estimate and the test by the use's cost. The render's measured efficiency
+// equals the prediction when visibility is the only noise, and is at least the prediction
+// when there is other noise (the stated lower bound), within the simulation's error.
+TEST(RenderEfficiency, MatchesASimulatedRenderAndBoundsOneWithOtherNoise) {
+  const RayTypeFractions f = fractions_of(0.7, 0.6, 0.55);
+  const UseSetting setting{{}, {.after_miss = 0.3, .after_hit = 0.4}};
+  const UsePrediction use = predict_use_at(ProxyUse::control_variate, ProxyKind::general, f, kCosts, setting);
+  const double mesh_variance = f.v_avg() * (1 - f.v_avg());
+  const double other_ns = 600;  // the rest of a sample
+  const double share = kCosts.mesh_ns / (other_ns + kCosts.mesh_ns);
+  const double predicted = render_efficiency(use.efficiency, use.variance / mesh_variance, share);
+  for (const bool other_noise : {false, true}) {
+    Random random(other_noise ? 11 : 12);
+    const int n = 400000;
+    double sum_exact = 0, sum2_exact = 0, sum_use = 0, sum2_use = 0;
+    for (int i = 0; i < n; ++i) {
+      const double x = other_noise ? 2 * random.uniform() : 1.0;
+      const double u = random.uniform();
+      const int type = u < f.f[0] ? 0 : u < f.f[0] + f.f[1] ? 1 : u < f.f[0] + f.f[1] + f.f[2] ? 2 : 3;
+      const double v = type >= 2 ? 1 : 0, proxy = type == 1 || type == 3 ? 1 : 0;
+      const double q = proxy == 1 ? setting.correction.after_miss : setting.correction.after_hit;
+      const double estimate = proxy + (random.uniform() < q ? (v - proxy) / q : 0.0);
+      sum_exact += x * v, sum2_exact += x * x * v * v;
+      sum_use += x * estimate, sum2_use += x * x * estimate * estimate;
+    }
+    const double var_exact = sum2_exact / n - (sum_exact / n) * (sum_exact / n);
+    const double var_use = sum2_use / n - (sum_use / n) * (sum_use / n);
+    const double measured = (var_exact * (other_ns + kCosts.mesh_ns)) / (var_use * (other_ns + use.ns_per_ray));
+    // Sampling error of a variance ratio at n = 4e5: a few per cent at most (4 sigma).
+    if (other_noise)
+      EXPECT_GT(measured, predicted * 0.97) << "the prediction is a lower bound";
+    else
+      EXPECT_NEAR(measured / predicted, 1.0, 0.03);
+  }
 }
 
 }  // namespace

@@ -175,6 +175,13 @@ UsePrediction predict_use(ProxyUse use, ProxyKind proved, const RayTypeFractions
   return predict_use_at(use, proved, fractions, costs, setting);
 }
 
+double render_efficiency(double ray_efficiency, double variance_ratio, double share) {
+  if (!(ray_efficiency > 0) || !(variance_ratio >= 0) || std::isinf(variance_ratio)) return 0;
+  const double s = std::clamp(share, 0.0, 1.0);
+  const double time_and_noise = variance_ratio * (1 - s) + (std::isinf(ray_efficiency) ? 0.0 : s / ray_efficiency);
+  return time_and_noise > 0 ? 1 / time_and_noise : kInfinity;
+}
+
 Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts& counts, const TraceCosts& costs,
                              const UseSetting& setting, std::uint64_t seed, int draws) {
   Random random(seed);

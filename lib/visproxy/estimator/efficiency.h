@@ -88,6 +88,18 @@ UsePrediction predict_use_at(ProxyUse use, ProxyKind proved, const RayTypeFracti
 UsePrediction predict_use(ProxyUse use, ProxyKind proved, const RayTypeFractions& fractions, const TraceCosts& costs,
                           const UseOptions& options = {});
 
+/// A use's efficiency over a whole render rather than over its shadow rays (Amdahl): when
+/// testing shadow rays against the mesh takes the share `share` of a sample's time and
+/// the use makes them `ray_efficiency` times as efficient with a variance
+/// `variance_ratio` = Var / Var(V) times the mesh's (1 for bounds),
+///     render = 1 / (variance_ratio (1 - share) + share / ray_efficiency).
+/// The render's noise is taken to grow by the whole variance ratio: the most it can when
+/// the ratio is at least 1 (visibility the render's only noise); any other noise (light
+/// sampling, the integrator's) dilutes it, so the figure is a lower bound in that respect.
+/// At share 1 it is ray_efficiency; at share 0, 1 / variance_ratio. 0 when ray_efficiency
+/// is 0 or the variance ratio unbounded.
+double render_efficiency(double ray_efficiency, double variance_ratio, double share);
+
 struct Interval {
   double lower = 0;
   double upper = 0;

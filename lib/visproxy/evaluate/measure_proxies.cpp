@@ -1,7 +1,10 @@
 #include "visproxy/evaluate/measure_proxies.h"
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -143,6 +146,48 @@ void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vect
       {"mesh_over_predicted", mesh / model->predict(mesh_work)}};
 }
 
+// The share of a camera sample's time that testing shadow rays against the mesh takes in
+// `scene` (Amdahl's fraction for the render-level prediction): the scene rendered as
+// `visproxy render` renders it by default (direct light, exact visibility, one shadow ray
+// per sample), on one thread at no more than 128 x 128 pixels, for 5 passes; a pass's time
+// is the median of the last 4 (the first warms the caches). The mesh's part of a sample is
+// its shadow rays times the mesh's own cost per shadow ray, timed on the scene's segments.
+json render_share(Scene scene, const RenderWorld& world, double mesh_ns_per_ray, std::uint64_t seed) {
+  const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
+  scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
+  scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  RenderOptions options;
+  options.spp = 5;
+  options.seed = seed;
+  std::vector<double> at_pass;
+  options.on_pass = [&](int, double seconds) { at_pass.push_back(seconds); };
+  RenderStats stats;
+  {
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    stats = render(scene, world, options).stats;
+  }
+  std::vector<double> pass_seconds;
+  for (std::size_t i = 1; i < at_pass.size(); ++i) pass_seconds.push_back(at_pass[i] - at_pass[i - 1]);
+  std::sort(pass_seconds.begin(), pass_seconds.end());
+  const double samples_per_pass = static_cast<double>(stats.camera_samples) / std::max(stats.passes, 1);
+  const double shadow_rays_per_sample = static_cast<double>(stats.shadow_rays) / std::max(1.0, static_cast<double>(stats.camera_samples));
+  const double ns_per_sample =
+      pass_seconds.empty() || !(samples_per_pass > 0) ? 0 : 1e9 * pass_seconds[pass_seconds.size() / 2] / samples_per_pass;
+  const double mesh_ns_per_sample = shadow_rays_per_sample * mesh_ns_per_ray;
+  const double share = ns_per_sample > 0 ? std::clamp(mesh_ns_per_sample / ns_per_sample, 0.0, 1.0) : 0.0;
+  return {{"description",
+           "share of a camera sample's time (direct light, exact visibility, one shadow ray per sample, one thread) "
+           "spent testing shadow rays against the mesh: shadow rays per sample x the mesh's ns per shadow ray on "
+           "the scene's segments, over the ns per sample"},
+          {"width", scene.camera.width},
+          {"height", scene.camera.height},
+          {"passes", stats.passes},
+          {"ns_per_camera_sample", ns_per_sample},
+          {"shadow_rays_per_camera_sample", shadow_rays_per_sample},
+          {"mesh_ns_per_shadow_ray", mesh_ns_per_ray},
+          {"share", share}};
+}
+
 }  // namespace
 
 std::optional<std::array<double, 2>> cost_ratio_interval(const json& measure) {
@@ -194,22 +239,24 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   std::vector<Eigen::Affine3d> placements;
   std::vector<Segment> segments;
   json rays;
+  std::optional<Scene> scene;
+  std::unique_ptr<RenderWorld> world;
   const Sphere line_sphere = bounding_sphere(mesh);
   if (options.scene.empty()) {
     segments = isotropic_lines(line_sphere, options.rays, options.seed);
     rays = ray_set_json(mesh, options);
     placements.push_back(Eigen::Affine3d::Identity());
   } else {
-    const Scene scene = load_scene(options.scene, options.on_warning);
-    std::vector<bool> exclude(scene.instances.size(), false);
-    for (std::size_t i = 0; i < scene.instances.size(); ++i)
-      if (scene.mesh(scene.instances[i].mesh).mesh == mesh) {
+    scene.emplace(load_scene(options.scene, options.on_warning));
+    std::vector<bool> exclude(scene->instances.size(), false);
+    for (std::size_t i = 0; i < scene->instances.size(); ++i)
+      if (scene->mesh(scene->instances[i].mesh).mesh == mesh) {
         exclude[i] = true;
-        placements.push_back(scene.instances[i].transform);
+        placements.push_back(scene->instances[i].transform);
       }
     if (placements.empty()) throw InvalidInputError(options.scene, "no instance of the scene uses the measured mesh");
-    const RenderWorld world(scene, std::vector<MeshProxies>(scene.instances.size()));
-    for (const ShadowSegment& s : scene_shadow_segments(scene, world, options.rays, options.seed, exclude))
+    world = std::make_unique<RenderWorld>(*scene, std::vector<MeshProxies>(scene->instances.size()));
+    for (const ShadowSegment& s : scene_shadow_segments(*scene, *world, options.rays, options.seed, exclude))
       segments.push_back({s.from, s.to});
     if (segments.empty()) throw InvalidInputError(options.scene, "the camera sees no lit surface to measure from");
     rays = {{"kind", "scene shadow segments"},
@@ -284,6 +331,13 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     entry["measure"] = std::move(measured);
   }
   if (timed) add_cost_model(manifest, mesh_work, proxy_work);
+  if (timed && scene) {
+    json share = render_share(*scene, *world, reference.mesh_ns_per_ray, options.seed);
+    share["scene"] = options.scene.string();
+    manifest["render_share"] = std::move(share);
+  } else {
+    manifest.erase("render_share");
+  }
   return manifest;
 }
 

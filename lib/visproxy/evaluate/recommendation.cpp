@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "visproxy/evaluate/measure_proxies.h"
 
@@ -32,6 +33,19 @@ std::string rays_text(const json& rays) {
   return count + " isotropic lines through the mesh's bounding sphere";
 }
 
+}  // namespace
+
+std::string render_phrase(const Recommendation& r, const UseFigures& figures) {
+  if (!std::isfinite(r.render_share) || std::isnan(figures.render_efficiency)) return "";
+  char share[32];
+  std::snprintf(share, sizeof share, "%.1f %%", 100 * r.render_share);
+  return "; over the render of " + r.render_scene + ", whose samples spend " + share +
+         " of their time testing shadow rays against the mesh, " + ratio_text(figures.render_efficiency) + "x [" +
+         ratio_text(figures.render_interval.lower) + ", " + ratio_text(figures.render_interval.upper) + "]";
+}
+
+namespace {
+
 std::string choice_sentence(const Recommendation& r, std::size_t u, int best, int next) {
   const ProxyUse use = kProxyUses[u];
   std::string text = use_phrase(use);
@@ -55,6 +69,7 @@ std::string choice_sentence(const Recommendation& r, std::size_t u, int best, in
     text += ", the best, " + p.name + ", is predicted " + figures_text(figures) +
             " as efficient as the mesh: the interval holds 1, so no gain is shown; trace the mesh";
   }
+  text += render_phrase(r, figures);
   if (next >= 0) {
     const ProxyEfficiency& runner = r.proxies[static_cast<std::size_t>(next)];
     const UseFigures& other = runner.uses[u];
@@ -81,6 +96,10 @@ std::string use_phrase(ProxyUse use) {
 
 Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_kind, std::size_t budget) {
   Recommendation r;
+  if (const auto share = manifest.find("render_share"); share != manifest.end() && share->is_object()) {
+    r.render_share = share->value("share", std::numeric_limits<double>::quiet_NaN());
+    r.render_scene = share->value("scene", std::string());
+  }
   for (const json& entry : manifest.at("proxies")) {
     if (!entry.contains("measure") || !entry["measure"].is_object()) continue;
     const json& measured = entry["measure"];
@@ -112,9 +131,20 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
         figures.prediction.usable = false, figures.prediction.efficiency = 0;
         figures.prediction.why_not = "over the budget of " + std::to_string(budget) + " primitives";
       }
-      if (figures.prediction.usable)
+      if (figures.prediction.usable) {
         figures.interval = efficiency_interval(kProxyUses[u], p.proved, counts, costs, figures.prediction.setting,
                                                r.seed + 0x9E3779B97F4A7C15ull * (r.proxies.size() * 3 + u + 1));
+        if (std::isfinite(r.render_share)) {
+          // The variance ratio at the prediction's point carries the interval's ends too.
+          const double mesh_variance = fractions.v_avg() * (1 - fractions.v_avg());
+          const double ratio = mesh_variance > 0 ? figures.prediction.variance / mesh_variance
+                               : figures.prediction.variance > 0 ? std::numeric_limits<double>::infinity()
+                                                                 : 1.0;
+          figures.render_efficiency = render_efficiency(figures.prediction.efficiency, ratio, r.render_share);
+          figures.render_interval = {render_efficiency(figures.interval.lower, ratio, r.render_share),
+                                     render_efficiency(figures.interval.upper, ratio, r.render_share)};
+        }
+      }
     }
     r.proxies.push_back(std::move(p));
   }
@@ -173,6 +203,11 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
       object["efficiency"] = number_or_null(p.uses[u].prediction.efficiency);
       object["interval"] = {number_or_null(p.uses[u].interval.lower), number_or_null(p.uses[u].interval.upper)};
       object["beats_mesh"] = p.uses[u].prediction.efficiency > 1 && p.uses[u].interval.lower > 1;
+      if (!std::isnan(p.uses[u].render_efficiency)) {
+        object["render_efficiency"] = number_or_null(p.uses[u].render_efficiency);
+        object["render_interval"] = {number_or_null(p.uses[u].render_interval.lower),
+                                     number_or_null(p.uses[u].render_interval.upper)};
+      }
     }
     uses[std::string(use_key(choice.use))] = object;
   }
@@ -189,6 +224,10 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
         figures["interval"] = {number_or_null(f.interval.lower), number_or_null(f.interval.upper)};
         figures["variance"] = f.prediction.variance;
         figures["ns_per_ray"] = f.prediction.ns_per_ray;
+        if (!std::isnan(f.render_efficiency)) {
+          figures["render_efficiency"] = number_or_null(f.render_efficiency);
+          figures["render_interval"] = {number_or_null(f.render_interval.lower), number_or_null(f.render_interval.upper)};
+        }
         if (kProxyUses[u] == ProxyUse::control_variate)
           figures["setting"] = {{"after_miss", f.prediction.setting.correction.after_miss},
                                 {"after_hit", f.prediction.setting.correction.after_hit}};
@@ -211,6 +250,8 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
        "(Var(V) c_mesh) / (Var c): how many times cheaper than tracing the mesh alone at equal error, with Var(V) = "
        "V_avg (1 - V_avg) and c the measured nanoseconds per ray on one core; intervals are 95 % over the sampling "
        "of the measured rays, widened by the spread of the proxy's cost over the timing blocks"},
+      {"render_share", std::isfinite(r.render_share) ? json{{"share", r.render_share}, {"scene", r.render_scene}}
+                                                      : json(nullptr)},
       {"uses", uses},
       {"proxies", proxies}};
 }

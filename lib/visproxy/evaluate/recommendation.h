@@ -5,6 +5,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -20,6 +21,10 @@ inline constexpr std::array<ProxyUse, 3> kProxyUses = {ProxyUse::control_variate
 struct UseFigures {
   UsePrediction prediction;  ///< at the use's most efficient setting (predict_use)
   Interval interval;         ///< 95 %, over the sampling of the measured rays
+  /// Over a render of the scene the proxies were measured in (render_efficiency with the
+  /// manifest's render_share); NaN when measured on isotropic lines or before the share was.
+  double render_efficiency = std::numeric_limits<double>::quiet_NaN();
+  Interval render_interval;  ///< `interval`'s ends carried to the render the same way
 };
 
 struct ProxyEfficiency {
@@ -47,6 +52,10 @@ struct UseChoice {
 struct Recommendation {
   std::string rays;  ///< the rays it was predicted on, in words
   std::uint64_t seed = 0;
+  /// The share of a sample's time that testing shadow rays against the mesh took in the
+  /// scene measured (manifest render_share); NaN when there is none.
+  double render_share = std::numeric_limits<double>::quiet_NaN();
+  std::string render_scene;
   std::vector<ProxyEfficiency> proxies;  ///< every measured proxy, in manifest order
   std::array<UseChoice, 3> choices;      ///< in the order of kProxyUses
 };
@@ -54,6 +63,10 @@ struct Recommendation {
 /// How a sentence about a use begins: "For shadow rays through the control variate", "For
 /// shadow rays through eq. 8", "For exact shadow rays through bounds".
 std::string use_phrase(ProxyUse use);
+
+/// "; over the render of SCENE, whose samples spend S % of their time testing shadow rays
+/// against the mesh, Xx [A, B]": a use's render-level figures, or "" without a render share.
+std::string render_phrase(const Recommendation& recommendation, const UseFigures& figures);
 
 /// Decides the kind proved for a manifest entry (from its verify object and the files).
 using ProvedKind = std::function<ProxyKind(const nlohmann::json& entry)>;

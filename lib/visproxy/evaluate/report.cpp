@@ -494,7 +494,7 @@ std::vector<ShippingLine> shipping_lines(const ReportFigures& figures, const jso
     if (const auto pictured = figures.pictures.find(p->name); pictured != figures.pictures.end())
       line.text += " (cast on its own, it would miss " + percent(pictured->second.missed_shadow) +
                    " of the mesh's shadow and add " + percent(pictured->second.extra_shadow) + ")";
-    line.text += ".";
+    line.text += render_phrase(r, *f) + ".";
     lines.push_back(std::move(line));
   }
   return lines;
