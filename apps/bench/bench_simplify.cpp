@@ -1,17 +1,20 @@
 // Speed and accuracy of visproxy's general proxy builders against meshoptimizer, OpenMesh
 // and CGAL, all in this process, on the same inputs and triangle budget.
 //
-//   visproxy-bench-simplify [--skip-slow] [--repetitions N] [--budget N] [MESH...]
+//   visproxy-bench-simplify [--skip-slow] [--meshopt-only] [--repetitions N] [--budget N] [--loop-to T]... [MESH...]
 //
-// Without MESH arguments it uses bunny00.off from VISPROXY_MESH_DIR and the same bunny
-// subdivided twice (1.2 M triangles, made here with subdivide_midpoint). Each method
-// simplifies to `--budget` triangles (512); the time is the fastest of the repetitions
-// (5, or 2 on inputs over 500 K triangles), counting the simplification only: copying the
-// input into each library's own mesh type is done before the clock starts. The error is the
+// Without MESH arguments it uses four closed meshes of Debian's libcgal-demo from
+// VISPROXY_MESH_DIR (armadillo, camel, cow, knot1); each --loop-to T adds every input
+// Loop-subdivided (CGAL) until it has at least T triangles. Each method simplifies to
+// `--budget` triangles (512), in repetitions (5, or 3 on inputs over 500 K triangles) that
+// run the methods one after the other, so that a repetition's ratios to meshoptimizer
+// compare runs made at one state of the machine; the table gives the median and the range
+// of the seconds and of those ratios. Only the simplification is timed: copying the input
+// into each library's own mesh type is done before the clock starts. The error is the
 // sampled two-sided Hausdorff distance to the input (visproxy::sampled_hausdorff_distance,
 // 20 000 samples a side plus every vertex) divided by the input's bounding-box diagonal.
 // --skip-slow leaves out OpenMesh and CGAL on inputs over 500 K triangles (they take
-// minutes there).
+// minutes there), --meshopt-only on every input.
 //
 // The methods:
 //   visproxy quadric   visproxy::simplify_quadric
@@ -34,6 +37,7 @@
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/GarlandHeckbert_plane_policies.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
+#include <CGAL/Subdivision_method_3/subdivision_methods_3.h>
 
 #include <meshoptimizer.h>
 
@@ -51,6 +55,7 @@
 #include <string_view>
 #include <vector>
 
+#include "surface_mesh.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/process.h"
 #include "visproxy/mesh/read_mesh.h"
@@ -238,48 +243,85 @@ const Method kMethods[] = {
 struct Row {
   std::string method;
   std::size_t input_triangles = 0, output_triangles = 0;
-  std::optional<double> seconds, hausdorff_relative;
+  std::vector<double> seconds;                // one per repetition
+  std::vector<double> ratios;                 // seconds / meshoptimizer's in the same repetition
+  std::optional<double> hausdorff_relative;
+  bool skipped = false;
 };
 
 std::size_t parse_count(const char* text, const char* option) {
   char* end = nullptr;
   const unsigned long long value = std::strtoull(text, &end, 10);
-  if (end == text || *end != '\0' || value == 0) die(std::string(option) + " wants a positive whole number, not '" + text + "'");
+  if (end == text || *end != '\0' || value == 0) die(std::string(option) + " needs a positive whole number, not '" + text + "'");
   return static_cast<std::size_t>(value);
 }
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// Loop subdivision (CGAL) until the mesh has at least `triangles`; the levels it took.
+std::pair<TriangleMesh, int> loop_subdivided(const TriangleMesh& mesh, std::size_t triangles) {
+  auto cgal = visproxy::bench::to_surface_mesh<CgalKernel::Point_3>(mesh);
+  int levels = 0;
+  while (cgal.number_of_faces() < triangles) {
+    CGAL::Subdivision_method_3::Loop_subdivision(cgal, CGAL::parameters::number_of_iterations(1));
+    ++levels;
+  }
+  return {visproxy::bench::from_surface_mesh<CgalKernel::Point_3>(cgal), levels};
+}
+
+constexpr const char* kUsage =
+    "usage: visproxy-bench-simplify [--skip-slow] [--meshopt-only] [--repetitions N] [--budget N] [--loop-to T]... "
+    "[MESH...]";
 
 }  // namespace
 
 int main(int argc, char** argv) {
   visproxy::disable_transparent_huge_pages();  // see visproxy/core/process.h
-  bool skip_slow = false;
+  bool skip_slow = false, meshopt_only = false;
   std::size_t repetitions = 0, budget = 512;
+  std::vector<std::size_t> loop_to;
   std::vector<fs::path> paths;
   for (int i = 1; i < argc; ++i) {
     const std::string_view argument = argv[i];
     if (argument == "--skip-slow") {
       skip_slow = true;
-    } else if ((argument == "--repetitions" || argument == "--budget") && i + 1 < argc) {
-      (argument == "--budget" ? budget : repetitions) = parse_count(argv[i + 1], argv[i]);
+    } else if (argument == "--meshopt-only") {
+      meshopt_only = true;
+    } else if ((argument == "--repetitions" || argument == "--budget" || argument == "--loop-to") && i + 1 < argc) {
+      const std::size_t value = parse_count(argv[i + 1], argv[i]);
+      if (argument == "--loop-to") loop_to.push_back(value);
+      else (argument == "--budget" ? budget : repetitions) = value;
       ++i;
     } else if (argument.starts_with("-")) {
-      die("unknown option '" + std::string(argument) +
-          "'\nusage: visproxy-bench-simplify [--skip-slow] [--repetitions N] [--budget N] [MESH...]");
+      die("unknown option '" + std::string(argument) + "'\n" + kUsage);
     } else {
       paths.emplace_back(argument);
     }
   }
 
-  // Inputs: named by file, or the bunny and the bunny subdivided twice.
+  // Inputs: named by file, or four closed meshes of Debian's libcgal-demo; each as it is
+  // and Loop-subdivided to each --loop-to count.
   std::vector<std::pair<std::string, TriangleMesh>> inputs;
   try {
-    if (paths.empty()) {
-      const fs::path bunny = fs::path(VISPROXY_MESH_DIR) / "bunny00.off";
-      if (!fs::is_regular_file(bunny)) die("no mesh file " + bunny.string() + " (build the 'cgal_meshes' target)");
-      inputs.emplace_back("bunny00.off", visproxy::read_mesh(bunny));
-      inputs.emplace_back("bunny00.off subdiv. x2", visproxy::subdivide_midpoint(inputs.front().second, 2));
+    if (paths.empty())
+      for (const char* name : {"armadillo.off", "camel.off", "cow.off", "knot1.off"}) {
+        const fs::path path = fs::path(VISPROXY_MESH_DIR) / name;
+        if (!fs::is_regular_file(path)) die("no mesh file " + path.string() + " (build the 'cgal_meshes' target)");
+        paths.push_back(path);
+      }
+    for (const fs::path& path : paths) {
+      const TriangleMesh mesh = visproxy::read_mesh(path);
+      inputs.emplace_back(path.filename().string(), mesh);
+      for (const std::size_t triangles : loop_to)
+        if (triangles > mesh.triangles.size()) {
+          auto [subdivided, levels] = loop_subdivided(mesh, triangles);
+          inputs.emplace_back(path.filename().string() + " loop" + std::to_string(levels), std::move(subdivided));
+        }
     }
-    for (const fs::path& path : paths) inputs.emplace_back(path.filename().string(), visproxy::read_mesh(path));
   } catch (const visproxy::Error& error) {
     die(error.what());
   }
@@ -287,53 +329,61 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, std::vector<Row>>> tables;
   for (const auto& [name, input] : inputs) {
     const bool large = input.triangles.size() > kLargeInput;
-    const std::size_t runs = repetitions > 0 ? repetitions : large ? 2 : 5;
+    const std::size_t runs = repetitions > 0 ? repetitions : large ? 3 : 5;
     const double diagonal = visproxy::bounding_box(input).diagonal();
     std::vector<Row> rows;
     for (const Method& method : kMethods) {
-      Row row{method.name, input.triangles.size(), 0, std::nullopt, std::nullopt};
-      if (skip_slow && large && method.slow) {
-        rows.push_back(row);
-        continue;
-      }
-      std::fprintf(stderr, "%s: %s ...\n", name.c_str(), method.name);
-      std::unique_ptr<Run> last;
-      for (std::size_t r = 0; r < runs; ++r) {
-        std::unique_ptr<Run> run = method.start(input, budget);
+      Row row{method.name, input.triangles.size(), 0, {}, {}, std::nullopt, false};
+      row.skipped = method.slow && (meshopt_only || (skip_slow && large));
+      rows.push_back(row);
+    }
+    // Repetitions interleave the methods, so that each repetition's ratios compare runs made
+    // at the same state of the machine.
+    std::fprintf(stderr, "%s (%zu triangles): %zu repetitions ...\n", name.c_str(), input.triangles.size(), runs);
+    std::vector<std::unique_ptr<Run>> last(rows.size());
+    for (std::size_t r = 0; r < runs; ++r)
+      for (std::size_t m = 0; m < rows.size(); ++m) {
+        if (rows[m].skipped) continue;
+        std::unique_ptr<Run> run = kMethods[m].start(input, budget);
         const Clock::time_point start = Clock::now();
         run->simplify();
-        const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-        row.seconds = row.seconds ? std::min(*row.seconds, seconds) : seconds;
-        last = std::move(run);
+        rows[m].seconds.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+        last[m] = std::move(run);
       }
-      const TriangleMesh output = last->result();
-      row.output_triangles = output.triangles.size();
+    for (std::size_t m = 0; m < rows.size(); ++m) {
+      if (rows[m].skipped) continue;
+      for (std::size_t r = 0; r < runs; ++r) rows[m].ratios.push_back(rows[m].seconds[r] / rows[1].seconds[r]);
+      const TriangleMesh output = last[m]->result();
+      rows[m].output_triangles = output.triangles.size();
       try {
-        row.hausdorff_relative = visproxy::sampled_hausdorff_distance(input, output).hausdorff_world() / diagonal;
+        rows[m].hausdorff_relative = visproxy::sampled_hausdorff_distance(input, output).hausdorff_world() / diagonal;
       } catch (const visproxy::Error& error) {
-        std::fprintf(stderr, "%s on %s: no distance: %s\n", method.name, name.c_str(), error.what());
+        std::fprintf(stderr, "%s on %s: no distance: %s\n", kMethods[m].name, name.c_str(), error.what());
       }
-      rows.push_back(row);
     }
     tables.emplace_back(name, rows);
   }
 
-  std::printf("\nSimplification to %zu triangles; time = fastest of the repetitions (s); ratio = time / "
-              "meshoptimizer's;\nHausdorff = sampled two-sided distance to the input / bounding-box diagonal.\n",
+  std::printf("\nSimplification to %zu triangles. seconds: the median of the repetitions and their range; ratio: "
+              "seconds / meshoptimizer's in the same repetition, median and range over the repetitions (the methods "
+              "run interleaved); Hausdorff: sampled two-sided distance to the input / bounding-box diagonal.\n",
               budget);
   for (const auto& [name, rows] : tables) {
-    std::printf("\n%-22s %-20s %10s %10s %10s %8s %10s\n", name.c_str(), "method", "input", "output", "seconds",
-                "ratio", "Hausdorff");
-    const std::optional<double> reference = rows[1].seconds;  // meshoptimizer
+    std::printf("\n%-24s %-20s %9s %7s %9s %-17s %6s %-13s %10s\n", name.c_str(), "method", "input", "output", "seconds",
+                "(range)", "ratio", "(range)", "Hausdorff");
     for (const Row& row : rows) {
-      std::printf("%-22s %-20s %10zu ", "", row.method.c_str(), row.input_triangles);
-      if (!row.seconds) {
-        std::printf("%10s %10s %8s %10s\n", "-", "skipped", "-", "-");
+      std::printf("%-24s %-20s %9zu ", "", row.method.c_str(), row.input_triangles);
+      if (row.skipped || row.seconds.empty()) {
+        std::printf("%7s %9s\n", "-", "skipped");
         continue;
       }
-      std::printf("%10zu %10.4f ", row.output_triangles, *row.seconds);
-      if (reference && *reference > 0) std::printf("%7.2fx ", *row.seconds / *reference);
-      else std::printf("%8s ", "-");
+      const auto [least, most] = std::minmax_element(row.seconds.begin(), row.seconds.end());
+      const auto [low, high] = std::minmax_element(row.ratios.begin(), row.ratios.end());
+      char seconds_range[32], ratio_range[32];
+      std::snprintf(seconds_range, sizeof seconds_range, "(%.4f-%.4f)", *least, *most);
+      std::snprintf(ratio_range, sizeof ratio_range, "(%.2f-%.2f)", *low, *high);
+      std::printf("%7zu %9.4f %-17s %5.2fx %-13s ", row.output_triangles, median(row.seconds), seconds_range,
+                  median(row.ratios), ratio_range);
       if (row.hausdorff_relative) std::printf("%10.5f\n", *row.hausdorff_relative);
       else std::printf("%10s\n", "-");
     }
