@@ -26,7 +26,9 @@ struct RenderStats {
   } control_variate;                              ///< stochastic, the control variate
   struct Bounds {
     std::uint64_t unoccluded = 0, occluded = 0, traced = 0;
-    std::uint64_t shafts_culled = 0;  ///< shading points whose light shaft missed every other instance
+    /// shading points that traced a second segment to a light, and whose light shaft (found then)
+    /// missed every other instance
+    std::uint64_t shafts_culled = 0;
   } bounds;
   struct Disks {
     std::uint64_t tests = 0;  ///< sphere disks compared with a segment

@@ -25,8 +25,13 @@ class BoundsPoint final : public PointVisibility {
   void end() override;
 
  private:
+  // The light shaft's instances, found when a second segment to a light leaves this point.
+  void find_shaft();
+
   BoundsVisibility& shared_;
   ShadingPoint point_;
+  int segments_ = 0;                          // segments to lights traced from this point so far
+  bool shaft_found_ = false;
   std::vector<std::size_t> shaft_instances_;  // the instances (other than the own) the light shaft meets
   unsigned shaft_bits_ = 0;                   // their instance bits
   bool traced_before_ = false;  // a proof failed here: the next segments go straight to the exact query
@@ -50,20 +55,28 @@ class BoundsVisibility final : public Visibility {
 
 void BoundsPoint::begin(const ShadingPoint& point) {
   point_ = point;
-  const RenderWorld& world = shared_.context_.world;
-  const int own = point.hit->instance;
-  shaft_instances_.clear();
+  segments_ = 0;
+  shaft_found_ = false;
   proof_failed_ = proof_tried_ = false;
-  LightShaft::From shaft_from = shared_.shaft_.from(point.position);
-  world.instances_where([&](const BoundingBox& box, const Sphere& ball) { return shared_.shaft_.meets(shaft_from, box, ball); },
-                        shaft_instances_);
+  // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
+  traced_before_ = shared_.proof_failures_[point.pixel] >= 2 && point.pass % 8 != 0;
+  connections_.begin(shared_.context_.world, point.position);
+}
+
+// The shaft from the point to every light costs more than one query of the outside proxies
+// (cone tests against the instances' boxes and balls): it pays only when several segments
+// leave the point, so the first segment goes to the proxies' query without it.
+void BoundsPoint::find_shaft() {
+  shaft_found_ = true;
+  const int own = point_.hit->instance;
+  shaft_instances_.clear();
+  LightShaft::From shaft_from = shared_.shaft_.from(point_.position);
+  shared_.context_.world.instances_where(
+      [&](const BoundingBox& box, const Sphere& ball) { return shared_.shaft_.meets(shaft_from, box, ball); }, shaft_instances_);
   std::erase(shaft_instances_, static_cast<std::size_t>(own));
   shaft_bits_ = 0;
   for (const std::size_t i : shaft_instances_) shaft_bits_ |= instance_bit(i);
-  if (shaft_instances_.empty()) ++point.stats->bounds.shafts_culled;
-  // Where proofs failed in the last passes of this pixel, skip them but every 8th pass.
-  traced_before_ = shared_.proof_failures_[point.pixel] >= 2 && point.pass % 8 != 0;
-  connections_.begin(world, point.position);
+  if (shaft_instances_.empty()) ++point_.stats->bounds.shafts_culled;
 }
 
 double BoundsPoint::to_light(const Vertex& end) {
@@ -79,12 +92,17 @@ double BoundsPoint::to_light(const Vertex& end) {
   const int own = point_.hit->instance;
   // Only the instances in the shaft whose bounding sphere this segment meets can block it.
   // (Among many, their balls are left to the query: the bits are shared beyond 31 instances.)
-  unsigned bits = 0;
-  if (shaft_instances_.size() > 31) {
-    bits = shaft_bits_;
-  } else {
-    for (const std::size_t i : shaft_instances_)
-      if (segment_meets_ball(world.instance_sphere(i), x, end - x, 0.0, 1.0)) bits |= instance_bit(i);
+  // The first segment from a point leaves every other instance to the query.
+  unsigned bits = InstanceFilter{}.bits;
+  if (segments_++ > 0) {
+    if (!shaft_found_) find_shaft();
+    bits = 0;
+    if (shaft_instances_.size() > 31) {
+      bits = shaft_bits_;
+    } else {
+      for (const std::size_t i : shaft_instances_)
+        if (segment_meets_ball(world.instance_sphere(i), x, end - x, 0.0, 1.0)) bits |= instance_bit(i);
+    }
   }
   const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
   bool rest_free = bits == 0;
