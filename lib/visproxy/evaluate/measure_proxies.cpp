@@ -152,7 +152,14 @@ void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vect
 // per sample), on one thread at no more than 128 x 128 pixels, for 5 passes; a pass's time
 // is the median of the last 4 (the first warms the caches). The mesh's part of a sample is
 // its shadow rays times the mesh's own cost per shadow ray, timed on the scene's segments.
-json render_share(Scene scene, const RenderWorld& world, double mesh_ns_per_ray, std::uint64_t seed) {
+json render_share(Scene& scene, const RenderWorld& world, double mesh_ns_per_ray, std::uint64_t seed) {
+  // The camera made smaller for the render, and given back (the scene's meshes are not copied).
+  const Camera camera = scene.camera;
+  struct Restore {
+    Scene& scene;
+    const Camera& camera;
+    ~Restore() { scene.camera = camera; }
+  } restore{scene, camera};
   const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
   scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
   scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
