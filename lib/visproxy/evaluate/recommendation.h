@@ -1,7 +1,7 @@
 #pragma once
 // Which proxy of a folder to ship, for each way a renderer can use one: the predicted
 // efficiency against tracing the mesh (estimator/efficiency.h) of every measured proxy,
-// with its 95 % interval, and the proxy that maximises it, in one sentence per use.
+// with its 95 % interval, and the proxy chosen for each use, in one sentence per use.
 
 #include <array>
 #include <functional>
@@ -38,8 +38,11 @@ struct ProxyEfficiency {
 
 struct UseChoice {
   ProxyUse use = ProxyUse::control_variate;
-  /// Index into Recommendation::proxies of the most efficient usable proxy; -1 when none
-  /// is usable (no proxy measured, costs not timed, no proved proxy for bounds).
+  /// Index into Recommendation::proxies of the proxy chosen: of those shown cheaper than the
+  /// mesh, the one whose interval's lower end is highest (or, among those its interval does
+  /// not tell apart from it, the one with the fewest primitives); when none is shown
+  /// cheaper, the most efficient usable one. -1 when none is usable (no proxy measured,
+  /// costs not timed, no proved proxy for bounds).
   int best = -1;
   /// One sentence: "For shadow rays through the control variate, outer-512 is predicted
   /// 1.83x [1.61, 2.04] cheaper than the mesh at equal error." Cheaper only when the whole
