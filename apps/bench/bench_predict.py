@@ -15,10 +15,10 @@ measured ratio lies inside the predicted interval and within 25 % of the predict
 Uses and the modes that realise them:
   bounds           <-> "bounds" (the first outside proxy the instance names; scenes whose
                        instances also name an inside proxy are predicted for the outside one only)
+  eq. 8            <-> "<first spec> eq8 optimal" (the scene's optimal probabilities, which the
+                       prediction assumes)
   control variate  <-> "<first spec> control variate learned" (its probabilities learned per pixel,
                        as near as the renderer gets to the optimum the prediction assumes)
-eq. 8 is not compared: the renderer offers it with equal or adaptive probabilities, and the
-prediction is made at the optimal ones.
 
 Usage: visproxy-bench-predict [--repetitions R] [--seconds S] [--rays N] [--reference-spp K]
                               [--work DIR] [SCENE...]
@@ -36,7 +36,7 @@ import sys
 import tempfile
 
 DEFAULT_SCENES = ["camel-herd.json", "cow-field.json", "knot-lanterns.json", "far-armadillo.json"]
-USES = [("bounds", "bounds"), ("control_variate", "control variate learned")]
+USES = [("bounds", "bounds"), ("eq8", "eq8 optimal"), ("control_variate", "control variate learned")]
 
 
 def run(command, log):

@@ -80,6 +80,9 @@ std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOpti
     out.push_back({spec + " eq8 adaptive", spec, adaptive});
     adaptive.cost_heuristic = true;
     out.push_back({spec + " eq8 adaptive + cost heuristic", spec, adaptive});
+    RenderOptions optimal = equal;
+    optimal.probabilities = ProbabilityMode::optimal;
+    out.push_back({spec + " eq8 optimal", spec, optimal});
     RenderOptions control = equal;
     control.estimator = StochasticEstimator::control_variate;
     out.push_back({spec + " control variate equal", spec, control});

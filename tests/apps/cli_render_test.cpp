@@ -289,17 +289,17 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::string table = read_file(out / "table.md");
   for (const char* mode : {"| exact |", "| bounds |", "| hull:32 eq8 equal |", "| hull:32 eq8 adaptive |",
-                           "| hull:32 eq8 adaptive + cost heuristic |", "| hull:32 control variate equal |",
+                           "| hull:32 eq8 adaptive + cost heuristic |", "| hull:32 eq8 optimal |", "| hull:32 control variate equal |",
                            "| hull:32 control variate learned |"})
     EXPECT_NE(table.find(mode), std::string::npos) << mode << "\n" << table;
   const std::string csv = read_file(out / "table.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 8);  // header + 7 modes
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 9);  // header + 8 modes
   EXPECT_NE(csv.find("\"exact\",,"), std::string::npos) << csv;
   for (const char* file : {"reference.pfm", "exact.pfm", "exact.png", "exact.error.png", "bounds.error.png",
                            "hull-32-control-variate-learned.error.png", "convergence.csv", "convergence.svg"})
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
   const std::string convergence = read_file(out / "convergence.csv");
-  EXPECT_EQ(std::count(convergence.begin(), convergence.end(), '\n'), 1 + 7 * 2);
+  EXPECT_EQ(std::count(convergence.begin(), convergence.end(), '\n'), 1 + 8 * 2);
   // The exact row's efficiency ratio is 1 by definition.
   const std::size_t exact_row = csv.find("\"exact\"");
   const std::string row = csv.substr(exact_row, csv.find('\n', exact_row) - exact_row);

@@ -226,6 +226,13 @@ TEST(Renderer, OptionsThatCannotGiveACorrectImageAreRefused) {
             std::string::npos);
   EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned}).find("control-variate"),
             std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::optimal,
+                     .estimator = StochasticEstimator::control_variate})
+                .find("eq. 8"),
+            std::string::npos);
+  EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::optimal, .probability_floor = 0})
+                .find("probability_floor"),
+            std::string::npos);
   EXPECT_NE(refused({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive, .probe_rays = 0})
                 .find("probe"),
             std::string::npos);

@@ -54,10 +54,39 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
     double cos_y = -y.normal.dot(to_light);
     if (y.two_sided) cos_y = std::abs(cos_y);
     if (hit->normal.dot(to_light) <= 0 || cos_y <= 0) continue;
-    segments.push_back({x, light_end(world, y, x)});
+    segments.push_back({x, light_end(world, y, x), hit->instance});
   }
   return segments;
 }
+
+namespace {
+
+// ProbabilityMode::optimal: eq. 8's optimal probabilities for each form of the rest of the
+// scene, from the ray types of the scene's own shadow segments (20 000, seeded from the
+// render's seed), each traced against the proxies and meshes of the instances its estimate
+// would see (all but its own with visibility splitting), as the probe rays of adaptive are.
+std::array<Probabilities, 3> scene_optimal_probabilities(const Scene& scene, const RenderWorld& world,
+                                                         const RenderOptions& options) {
+  std::array<RayTypeCounts, 3> counts;
+  const std::vector<bool> none(scene.instances.size(), false);
+  std::vector<ProxyKind> kinds;
+  for (std::size_t i = 0; i < scene.instances.size(); ++i)
+    kinds.push_back(world.stochastic_kind(options.split ? static_cast<int>(i) : -1));
+  for (const ShadowSegment& s : scene_shadow_segments(scene, world, 20000, options.seed ^ 0x6F7074696D616CULL, none)) {
+    const InstanceFilter rest{.skip = options.split ? s.instance : -1, .only = -1};
+    const bool mesh = world.mesh_blocks(s.from, s.to, rest), proxy = world.proxy_blocks(s.from, s.to, rest);
+    counts[static_cast<std::size_t>(kinds[static_cast<std::size_t>(s.instance)])].add(mesh, proxy);
+    if (kinds[static_cast<std::size_t>(s.instance)] != ProxyKind::general)
+      counts[static_cast<std::size_t>(ProxyKind::general)].add(mesh, proxy);  // connections use the general form
+  }
+  std::array<Probabilities, 3> optimal;
+  for (const ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general})
+    optimal[static_cast<std::size_t>(kind)] =
+        optimal_probabilities(kind, RayTypeFractions::from(counts[static_cast<std::size_t>(kind)]), {.floor = options.probability_floor});
+  return optimal;
+}
+
+}  // namespace
 
 RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -69,7 +98,10 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const bool counting = world.counting();
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
 
-  const std::unique_ptr<Visibility> visibility = make_visibility({scene, world, options, lights, pixels});
+  const std::array<Probabilities, 3> optimal =
+      stochastic && options.probabilities == ProbabilityMode::optimal ? scene_optimal_probabilities(scene, world, options)
+                                                                      : std::array<Probabilities, 3>{};
+  const std::unique_ptr<Visibility> visibility = make_visibility({scene, world, options, lights, pixels, optimal});
   const IntegratorContext integrator_context{scene, world, options, lights};
   const std::unique_ptr<Integrator> integrator = make_integrator(integrator_context);
   // The VPL integrator shades with its VPLs even where no area light is left.

@@ -39,6 +39,7 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
 /// skipped. Deterministic for a seed; stops after 100 x count camera samples.
 struct ShadowSegment {
   Vertex from, to;
+  int instance = -1;  ///< the instance `from` lies on
 };
 std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
                                                  std::uint64_t seed, const std::vector<bool>& exclude);

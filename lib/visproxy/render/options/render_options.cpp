@@ -30,7 +30,8 @@ template <>
 const std::vector<std::pair<std::string_view, ProbabilityMode>>& choice_names<ProbabilityMode>() {
   static const std::vector<std::pair<std::string_view, ProbabilityMode>> names{{"equal", ProbabilityMode::equal},
                                                                                {"adaptive", ProbabilityMode::adaptive},
-                                                                               {"learned", ProbabilityMode::learned}};
+                                                                               {"learned", ProbabilityMode::learned},
+                                                                               {"optimal", ProbabilityMode::optimal}};
   return names;
 }
 template <>
@@ -88,11 +89,13 @@ void validate(const RenderOptions& options) {
   const bool control_variate = options.estimator == StochasticEstimator::control_variate;
   if (options.probabilities == ProbabilityMode::learned && !control_variate)
     fail("learned probabilities need the control-variate estimator");
+  if (options.probabilities == ProbabilityMode::optimal && control_variate)
+    fail("optimal probabilities are eq. 8's; the control variate learns its own (learned)");
   if (options.probabilities == ProbabilityMode::adaptive && options.probe_rays < 1)
     fail("adaptive probabilities need at least one probe ray");
   if (options.probabilities != ProbabilityMode::equal && !(options.probability_floor > 0))
     fail(
-        "probability_floor must be positive with adaptive or learned probabilities: a ray type the probes or a "
+        "probability_floor must be positive with adaptive, learned or optimal probabilities: a ray type the probes or a "
         "pixel's corrections have not seen would get probability 0, and the estimate would be biased wherever it "
         "occurs");
 }

@@ -28,8 +28,11 @@ enum class IntegratorKind { direct, vpl, lightcuts };
 /// exact: its mesh is traced and its spheres are left out; none: all its spheres count.
 enum class SelfShadow { heuristic, exact, none };
 /// equal; adaptive: from K probe rays per shading point (or per pixel, probe_passes);
-/// learned (control variate only): from the corrections each pixel traced in earlier samples.
-enum class ProbabilityMode { equal, adaptive, learned };
+/// learned (control variate only): from the corrections each pixel traced in earlier samples;
+/// optimal (eq. 8 only): one set for the whole image, eq. 8's optimum for the ray types of
+/// the scene's own shadow segments, traced against proxies and meshes before the render
+/// (the probabilities `visproxy measure --scene` finds and `report` predicts eq. 8 with).
+enum class ProbabilityMode { equal, adaptive, learned, optimal };
 /// How `stochastic` combines proxy and mesh: eq. 8 (a term drawn first, the paper), or the
 /// proxy as a control variate corrected under Russian roulette (CorrectionProbabilities).
 enum class StochasticEstimator { term_choice, control_variate };

@@ -67,6 +67,10 @@ void TermChoicePoint::begin(const ShadingPoint& point) {
   // Segments that do not end on a light prove nothing about outside or inside proxies that
   // are traced as surfaces: their estimate uses the general form.
   connection_probabilities_ = equal_probabilities(ProxyKind::general);
+  if (options.probabilities == ProbabilityMode::optimal) {
+    probabilities_ = shared_.context_.optimal[static_cast<std::size_t>(kind)];
+    connection_probabilities_ = shared_.context_.optimal[static_cast<std::size_t>(ProxyKind::general)];
+  }
   if (options.probabilities == ProbabilityMode::adaptive) {
     const RayTypeFractions fractions = RayTypeFractions::from(
         adaptive_probe_counts(shared_.context_, point, shared_.pixel_probes_.empty() ? nullptr : &shared_.pixel_probes_[point.pixel]));

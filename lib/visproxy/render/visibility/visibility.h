@@ -4,6 +4,7 @@
 // by occluder disks. A strategy answers the segments of one shading point at a time, one
 // by one or as a group that shares the point as origin; integrators choose the segments.
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -69,6 +70,9 @@ struct VisibilityContext {
   const RenderOptions& options;
   const LightSampler& lights;
   std::size_t pixels = 0;
+  /// ProbabilityMode::optimal: eq. 8's probabilities per form of the rest of the scene
+  /// (indexed by ProxyKind: outside, inside, general), found before the render.
+  std::array<Probabilities, 3> optimal = {};
 };
 
 std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);
