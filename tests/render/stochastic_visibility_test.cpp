@@ -244,6 +244,10 @@ TEST(StochasticVisibility, OptimalProbabilitiesAreOneSetAndLowerEq8sNoise) {
         const auto most = std::max_element(p1.begin(), p1.end(), [](const auto& x, const auto& y) { return x.second < y.second; });
         EXPECT_GE(most->second, static_cast<int>(n / 2)) << "the floor's pixels share one p1";
         EXPECT_GT(std::abs(most->first - 1.0 / 3), 0.05) << "p1 " << most->first;
+        // The stats say which probabilities were used: the floor's are the general form's.
+        ASSERT_TRUE(b.stats.optimal_probabilities.contains("general")) << b.stats.optimal_probabilities.dump();
+        EXPECT_NEAR(b.stats.optimal_probabilities["general"][0].get<double>(), most->first, 1e-12);
+        EXPECT_TRUE(a.stats.optimal_probabilities.is_null());
       }
     }
     for (std::size_t i = 0; i < n; ++i) spread[mode == ProbabilityMode::optimal] += square[i] / seeds - (sum[i] / seeds) * (sum[i] / seeds);

@@ -189,6 +189,11 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   for (const RenderStats& s : thread_stats) result.stats += s;
   result.cut_map = integrator->cut_map(std::max(passes, 1));
   result.stats.integrator = integrator->describe();
+  if (stochastic && options.probabilities == ProbabilityMode::optimal)
+    for (const ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general}) {
+      const Probabilities& p = optimal[static_cast<std::size_t>(kind)];
+      result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
+    }
   result.stats.passes = passes;
   result.stats.counted = counting;
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -29,6 +29,7 @@ nlohmann::json RenderStats::to_json() const {
           {"probe_rays", probe_rays},
           {"exact_tests_per_shadow_ray", static_cast<double>(exact_tests) / rays},
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
+          {"optimal_probabilities", optimal_probabilities},
           {"stochastic_terms",
            {{"a_proxy_only", eq8.terms[0]},
             {"b_mesh_if_proxy_hit", eq8.terms[1]},

@@ -37,6 +37,9 @@ struct RenderStats {
     std::uint64_t clusters = 0;
   } disks;                            ///< occluder disks (spheres, and the control variate's V' with VPLs)
   nlohmann::json integrator;          ///< what the integrator reports (vpl: the VPLs, the clamp, the energy it dropped)
+  /// ProbabilityMode::optimal: the probabilities used per form of the rest of the scene
+  /// ({"outside": [p1, p2, p3], "inside": ..., "general": ...}); null otherwise.
+  nlohmann::json optimal_probabilities;
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries
