@@ -58,7 +58,17 @@ void expect_bounds_identical_and_finite(CliRender& test, const std::filesystem::
                                   "--visibility stochastic --estimator control-variate --probabilities adaptive --probe-passes 1 "
                                   "--probe-rays 2 --spp 2 " + size);
   ASSERT_EQ(probed.exit_code, 0) << probed.err;
-  for (const char* name : {"exact", "bounds", "stochastic", "adaptive", "learned", "probed"})
+  const auto optimal = test.render(scene, "optimal", "--visibility stochastic --probabilities optimal --spp 2 " + size);
+  ASSERT_EQ(optimal.exit_code, 0) << optimal.err;
+  const json optimal_stats = json::parse(read_file(test.folder() / "optimal.stats.json"));
+  EXPECT_EQ(optimal_stats["probabilities"], "optimal");
+  EXPECT_EQ(optimal_stats["stats"]["optimal_probabilities"]["general"].size(), 3u) << optimal_stats["stats"].dump();
+  // Optimal probabilities are eq. 8's: with the control variate, refused in one line.
+  const auto optimal_cv =
+      test.render(scene, "optimal-cv", "--visibility stochastic --estimator control-variate --probabilities optimal " + size);
+  EXPECT_EQ(optimal_cv.exit_code, 2);
+  EXPECT_NE(optimal_cv.err.find("optimal needs --estimator eq8"), std::string::npos) << optimal_cv.err;
+  for (const char* name : {"exact", "bounds", "stochastic", "adaptive", "learned", "probed", "optimal"})
     testing::expect_described(json::parse(read_file(test.folder() / (std::string(name) + ".stats.json"))), "render-stats.schema.json");
   const Image exact = test.image("exact");
   EXPECT_EQ(exact.pixels, test.image("bounds").pixels);  // bit-identical
