@@ -305,18 +305,18 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     if (options.on_start) options.on_start(entry.at("name").get<std::string>());
     const auto start = std::chrono::steady_clock::now();
     const ProxyGeometry geometry = read(entry, index++);
-    const RayScene proxy_scene = geometry.type == PrimitiveType::sphere
-                                     ? RayScene(place_spheres(geometry.spheres), center)
-                                     : RayScene(place_mesh(geometry.mesh), center);
+    // The proxy placed on every instance once: traced by Embree, and its work counted.
+    const bool balls = geometry.type == PrimitiveType::sphere;
+    const std::vector<Sphere> placed_balls = balls ? place_spheres(geometry.spheres) : std::vector<Sphere>{};
+    const TriangleMesh placed_proxy = balls ? TriangleMesh{} : place_mesh(geometry.mesh);
+    const RayScene proxy_scene = balls ? RayScene(placed_balls, center) : RayScene(placed_proxy, center);
     json proxy_rays = rays;
     ProxyMeasurement measurement;
     // The work of the timed rays, counted against the same placed geometry.
     auto work_on = [&](std::span<const Segment> traced) {
       if (!timed) return WorkPerRay{};
-      const bool balls = geometry.type == PrimitiveType::sphere;
-      return balls ? count_work(CountingBvh(std::span<const Sphere>(place_spheres(geometry.spheres))), true, traced,
-                                options.timing.rays)
-                   : count_work(CountingBvh(place_mesh(geometry.mesh)), false, traced, options.timing.rays);
+      if (balls) return count_work(CountingBvh(std::span<const Sphere>(placed_balls)), true, traced, options.timing.rays);
+      return count_work(CountingBvh(placed_proxy), false, traced, options.timing.rays);
     };
     if (const double radius = options.scene.empty() ? reach(geometry, line_sphere.center) : 0;
         radius > line_sphere.radius) {
