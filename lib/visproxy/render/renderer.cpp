@@ -65,13 +65,13 @@ namespace {
 // scene, from the ray types of the scene's own shadow segments (20 000, seeded from the
 // render's seed), each traced against the proxies and meshes of the instances its estimate
 // would see (all but its own with visibility splitting), as the probe rays of adaptive are.
-std::array<Probabilities, 3> scene_optimal_probabilities(const Scene& scene, const RenderWorld& world,
-                                                         const RenderOptions& options) {
+std::array<Probabilities, 3> scene_optimal_probabilities(const VisibilityContext& context) {
+  const Scene& scene = context.scene;
+  const RenderWorld& world = context.world;
+  const RenderOptions& options = context.options;
   std::array<RayTypeCounts, 3> counts;
   const std::vector<bool> none(scene.instances.size(), false);
-  std::vector<ProxyKind> kinds;
-  for (std::size_t i = 0; i < scene.instances.size(); ++i)
-    kinds.push_back(world.stochastic_kind(options.split ? static_cast<int>(i) : -1));
+  const std::vector<ProxyKind> kinds = stochastic_kinds(context);
   for (const ShadowSegment& s : scene_shadow_segments(scene, world, 20000, options.seed ^ 0x6F7074696D616CULL, none)) {
     const InstanceFilter rest{.skip = options.split ? s.instance : -1, .only = -1};
     const bool mesh = world.mesh_blocks(s.from, s.to, rest), proxy = world.proxy_blocks(s.from, s.to, rest);
@@ -98,10 +98,10 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const bool counting = world.counting();
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
 
-  const std::array<Probabilities, 3> optimal =
-      stochastic && options.probabilities == ProbabilityMode::optimal ? scene_optimal_probabilities(scene, world, options)
-                                                                      : std::array<Probabilities, 3>{};
-  const std::unique_ptr<Visibility> visibility = make_visibility({scene, world, options, lights, pixels, optimal});
+  VisibilityContext visibility_context{scene, world, options, lights, pixels};
+  const bool optimal = stochastic && options.probabilities == ProbabilityMode::optimal;
+  if (optimal) visibility_context.optimal = scene_optimal_probabilities(visibility_context);
+  const std::unique_ptr<Visibility> visibility = make_visibility(visibility_context);
   const IntegratorContext integrator_context{scene, world, options, lights};
   const std::unique_ptr<Integrator> integrator = make_integrator(integrator_context);
   // The VPL integrator shades with its VPLs even where no area light is left.
@@ -189,9 +189,9 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   for (const RenderStats& s : thread_stats) result.stats += s;
   result.cut_map = integrator->cut_map(std::max(passes, 1));
   result.stats.integrator = integrator->describe();
-  if (stochastic && options.probabilities == ProbabilityMode::optimal)
+  if (optimal)
     for (const ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general}) {
-      const Probabilities& p = optimal[static_cast<std::size_t>(kind)];
+      const Probabilities& p = visibility_context.optimal[static_cast<std::size_t>(kind)];
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
   result.stats.passes = passes;
