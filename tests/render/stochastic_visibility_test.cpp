@@ -207,6 +207,18 @@ TEST(StochasticVisibility, ProxiesAndMeshesAnswerAsDesigned) {
   EXPECT_FALSE(inner.proxy_blocks(kSegments[0].from, kSegments[0].to, {.skip = 1, .only = -1}));  // spheres filtered too
 }
 
+// The scene of scene_with(proxy) seen from low beside the ball, 8 x 8 pixels, so that
+// most pixels show the floor in the ball's penumbra.
+TwoInstances penumbra_view(const InstanceProxy& proxy) {
+  TwoInstances s = scene_with(proxy);
+  s.scene.camera.from = {0, -3.2, 0.6};
+  s.scene.camera.at = {0, 0, 0};
+  s.scene.camera.up = {0, 0, 1};
+  s.scene.camera.fov_degrees = 70;
+  s.scene.camera.width = s.scene.camera.height = 8;
+  return s;
+}
+
 // eq. 8 with the scene's optimal probabilities (ProbabilityMode::optimal): one set for the
 // image (the p1 map is one value wherever the shading point's form is the same), not the
 // equal ones, and less noise than with those at the same samples: the paired difference to
@@ -214,12 +226,7 @@ TEST(StochasticVisibility, ProxiesAndMeshesAnswerAsDesigned) {
 // With a general proxy the equal probabilities are 1/3 each; the scene's optimum is far
 // from them (the proxy sticks out of the ball and misses its rim).
 TEST(StochasticVisibility, OptimalProbabilitiesAreOneSetAndLowerEq8sNoise) {
-  TwoInstances s = scene_with({ProxyKind::general, "general", sphere_set_mesh({{{0.3, 0, 2}, 0.8}}, 2), {}});
-  s.scene.camera.from = {0, -3.2, 0.6};
-  s.scene.camera.at = {0, 0, 0};
-  s.scene.camera.up = {0, 0, 1};
-  s.scene.camera.fov_degrees = 70;
-  s.scene.camera.width = s.scene.camera.height = 8;
+  const TwoInstances s = penumbra_view({ProxyKind::general, "general", sphere_set_mesh({{{0.3, 0, 2}, 0.8}}, 2), {}});
   const RenderWorld world(s.scene, s.proxies);
   constexpr int seeds = 48;
   const std::size_t n = 64;
@@ -279,12 +286,7 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
   constexpr double critical = 5.42, power = 1.30;
   constexpr double kDetectableBias = 0.05;  // of the mean penumbra radiance, power 0.9
   for (const InstanceProxy& proxy : proxies) {
-    TwoInstances s = scene_with(proxy);
-    s.scene.camera.from = {0, -3.2, 0.6};
-    s.scene.camera.at = {0, 0, 0};
-    s.scene.camera.up = {0, 0, 1};
-    s.scene.camera.fov_degrees = 70;
-    s.scene.camera.width = s.scene.camera.height = 8;
+    const TwoInstances s = penumbra_view(proxy);
     const RenderWorld world(s.scene, s.proxies);
     struct Variant {
       StochasticEstimator estimator;
