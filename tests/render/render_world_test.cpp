@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <numbers>
 
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/sphere_set.h"
@@ -634,6 +636,104 @@ TEST(RenderWorld, ShortcutsStayExactOnASliverFanUnderAGrazingLight) {
       EXPECT_LT(std::abs(z), 4.0) << name_of(estimator) << ", hair " << hair;
     }
   }
+}
+
+}  // namespace
+}  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+// Tori around one light, with every kind of stochastic proxy a split test meets: a clipped
+// convex box (outside), a traced coarse torus (general), balls (general), none (exact), and
+// a floor; `shift` moves the whole scene.
+Scene split_test_scene(const Vertex& shift, std::vector<MeshProxies>& proxies) {
+  Scene scene;
+  scene.meshes.push_back({"ring", {}, testing::torus(1.0, 0.35, 48, 16), {}});
+  scene.meshes.push_back({"floor", {}, quad(shift + Vertex(-6, -6, -1), {12, 0, 0}, {0, 12, 0}), {}});
+  const Vertex places[4] = {{-2.2, -2.2, 0}, {2.2, -2.2, 0.3}, {-2.2, 2.2, 0.6}, {2.2, 2.2, 0.1}};
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Affine3d transform = Eigen::Affine3d::Identity();
+    transform.translate(shift + places[i]).rotate(Eigen::AngleAxisd(0.4 * (i + 1), Vertex(1, 0.5, 0).normalized()));
+    scene.instances.push_back({"ring", transform, Color::Constant(0.5), {}});
+  }
+  scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
+  scene.lights.push_back(downward_light(shift + Vertex(0, 0, 4), 1.5));
+  scene.camera.from = shift + Vertex(0, -7, 5);
+  scene.camera.at = shift;
+  scene.camera.up = {0, 0, 1};
+  scene.camera.width = scene.camera.height = 24;
+  proxies.assign(scene.instances.size(), {});
+  proxies[0].stochastic = InstanceProxy{ProxyKind::outside, "aabb", box({-1.4, -1.4, -0.4}, {1.4, 1.4, 0.4}), {}, true};
+  proxies[1].stochastic = InstanceProxy{ProxyKind::general, "quadric:64", testing::torus(1.0, 0.3, 8, 4), {}, false};
+  std::vector<Sphere> balls;
+  for (int k = 0; k < 12; ++k) {
+    const double angle = 2 * std::numbers::pi * k / 12;
+    balls.push_back({Vertex(std::cos(angle), std::sin(angle), 0), 0.3});
+  }
+  proxies[2].stochastic = InstanceProxy{ProxyKind::general, "spheres:12", {}, balls, false};
+  return scene;  // instances 3 (a ring) and 4 (the floor) have no proxy: traced exactly
+}
+
+// Split scenes answer every segment as the own mesh and then the other instances' proxies
+// would, one by one, on segments from points near and inside the tori and below the floor (own mesh blocking,
+// a proxy blocking, both, neither), near the origin and 10^6 away from it; a clear segment
+// costs one query instead of two. Beyond kSplitScenesUpTo instances, and in counting
+// worlds, there are no split scenes and the answers are the same.
+TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
+  for (const Vertex& shift : {Vertex(0, 0, 0), Vertex(1e6, -1e6, 5e5)}) {
+    std::vector<MeshProxies> proxies;
+    const Scene scene = split_test_scene(shift, proxies);
+    const RenderWorld split(scene, proxies), plain(scene, proxies, {.split_scenes = false});
+    Random random(5);
+    const auto uniform = [&](double low, double high) { return low + (high - low) * random.uniform(); };
+    for (int own = 0; own < static_cast<int>(scene.instances.size()); ++own) {
+      EXPECT_TRUE(split.has_split_scene(own));
+      EXPECT_FALSE(plain.has_split_scene(own));
+      std::array<int, 3> seen{};
+      for (int k = 0; k < 3000; ++k) {
+        const Vertex from = shift + Vertex(uniform(-3.5, 3.5), uniform(-3.5, 3.5), uniform(-1.4, 1.2));  // some below the floor
+        const Vertex to = shift + Vertex(uniform(-0.7, 0.7), uniform(-0.7, 0.7), 3.99);
+        for (const bool trace_own : {true, false}) {
+          SplitAnswer expected = SplitAnswer::clear;
+          if (trace_own && plain.mesh_blocks(from, to, {.skip = -1, .only = own}))
+            expected = SplitAnswer::own_blocks;
+          else if (plain.proxy_blocks(from, to, {.skip = own, .only = -1}))
+            expected = SplitAnswer::proxy_blocks;
+          std::uint64_t exact = 0, proxy = 0, plain_exact = 0, plain_proxy = 0;
+          ASSERT_EQ(split.split_blocks(from, to, own, trace_own, exact, proxy), expected) << own << " " << k;
+          ASSERT_EQ(plain.split_blocks(from, to, own, trace_own, plain_exact, plain_proxy), expected) << own << " " << k;
+          if (trace_own) ++seen[static_cast<std::size_t>(expected)];
+          if (trace_own && expected == SplitAnswer::clear) {
+            EXPECT_EQ(exact + proxy, 1u);
+            EXPECT_EQ(plain_exact + plain_proxy, 2u);
+          }
+        }
+      }
+      // Every answer was met, so the comparison covered each path.
+      for (const int count : seen) EXPECT_GT(count, 20) << "instance " << own;
+    }
+    // The control variate and eq. 8 with splitting render the same images either way.
+    for (const StochasticEstimator estimator : {StochasticEstimator::control_variate, StochasticEstimator::term_choice}) {
+      const RenderOptions options{.visibility = VisibilityMode::stochastic, .estimator = estimator, .spp = 4, .shadow_rays = 2, .seed = 9};
+      const RenderResult a = render(scene, split, options), b = render(scene, plain, options);
+      EXPECT_EQ(a.image.pixels, b.image.pixels);
+      EXPECT_LT(a.stats.exact_tests + a.stats.proxy_tests, b.stats.exact_tests + b.stats.proxy_tests);
+    }
+  }
+  // No split scenes beyond kSplitScenesUpTo instances, nor when counting.
+  std::vector<MeshProxies> proxies;
+  Scene many = split_test_scene(Vertex::Zero(), proxies);
+  while (many.instances.size() <= kSplitScenesUpTo) {
+    many.instances.push_back(many.instances[3]);
+    many.instances.back().transform.translate(Vertex(0, 0, 0.01 * static_cast<double>(many.instances.size())));
+    proxies.push_back(proxies[1]);
+  }
+  std::vector<MeshProxies> few;
+  const Scene small = split_test_scene(Vertex::Zero(), few);
+  const RenderWorld crowded(many, proxies), counting(small, few, {.counting = true});
+  EXPECT_FALSE(crowded.has_split_scene(0));
+  EXPECT_FALSE(counting.has_split_scene(0));
 }
 
 }  // namespace

@@ -14,11 +14,11 @@ ControlVariateSample control_variate_visibility(const RenderWorld& world, const 
                                                 const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
                                                 bool own_cannot_block) {
   ControlVariateSample sample;
-  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
-  if (!rest) return sample;
-  ++stats.proxy_tests;
+  const ProxyAnswer answer = proxy_answer(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (answer.own_blocks) return sample;
+  const InstanceFilter& rest = answer.rest;
   sample.proxy_traced = true;
-  sample.proxy_blocked = world.proxy_blocks(from, to, *rest);
+  sample.proxy_blocked = answer.proxy_blocked;
   const double proxy = sample.proxy_blocked ? 0.0 : 1.0;
   sample.trace_probability = sample.proxy_blocked ? q.after_hit : q.after_miss;
   sample.visibility = proxy;
@@ -26,7 +26,7 @@ ControlVariateSample control_variate_visibility(const RenderWorld& world, const 
   ++(sample.proxy_blocked ? stats.control_variate.after_hit : stats.control_variate.after_miss);
   ++stats.exact_tests;
   sample.mesh_traced = true;
-  sample.mesh_blocked = world.mesh_blocks(from, to, *rest);
+  sample.mesh_blocked = world.mesh_blocks(from, to, rest);
   sample.visibility = proxy + ((sample.mesh_blocked ? 0.0 : 1.0) - proxy) / sample.trace_probability;
   return sample;
 }
@@ -40,10 +40,10 @@ class ControlVariatePoint final : public PointVisibility {
   explicit ControlVariatePoint(ControlVariateVisibility& shared) : shared_(shared) {}
   void begin(const ShadingPoint& point) override;
   double to_light(const Vertex& end) override {
-    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, corrections_);
+    return disks_in_use_ ? disk_answer(end, connection_corrections()) : answer(end, light_corrections());
   }
   double connection(const Vertex& end) override {
-    return disks_in_use_ ? disk_answer(end, connection_corrections_) : answer(end, connection_corrections_);
+    return disks_in_use_ ? disk_answer(end, connection_corrections()) : answer(end, connection_corrections());
   }
   void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) override;
 
@@ -53,6 +53,10 @@ class ControlVariatePoint final : public PointVisibility {
   // the meshes of the instances the disks stand for.
   double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
   void learn(bool proxy_blocked, bool mesh_blocked);
+  // The probabilities for segments to a light (the kind of the rest of the scene) and for
+  // other segments (general), brought up to date with the pixel's evidence when it grew.
+  const CorrectionProbabilities& light_corrections();
+  const CorrectionProbabilities& connection_corrections();
   bool disks_in_use_ = false;
   PointDisks disks_;
   ExactConnections exact_part_;  // traced exactly: the own instance when splitting, instances without sphere sets
@@ -68,6 +72,7 @@ class ControlVariatePoint final : public PointVisibility {
   ShadingPoint point_;
   ProxyKind kind_ = ProxyKind::general;
   CorrectionProbabilities corrections_, connection_corrections_;
+  bool corrections_stale_ = false, connection_corrections_stale_ = false;  // learned: evidence added since computed
 };
 
 class ControlVariateVisibility final : public Visibility {
@@ -108,10 +113,8 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
     corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
     connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
   }
-  if (options.probabilities == ProbabilityMode::learned) {
-    corrections_ = correction_probabilities(kind_, shared_.pixel_evidence_[point.pixel], shared_.options_);
-    connection_corrections_ = correction_probabilities(ProxyKind::general, shared_.pixel_evidence_[point.pixel], shared_.options_);
-  }
+  // learned: computed when first asked (an integrator asks for one of the two kinds of segment).
+  corrections_stale_ = connection_corrections_stale_ = options.probabilities == ProbabilityMode::learned;
   disks_in_use_ = shared_.disks_;
   if (!disks_in_use_) return;
   // Traced exactly: the own instance when splitting, and every instance without a sphere
@@ -135,7 +138,7 @@ void ControlVariatePoint::connections(std::span<const Vertex> ends, std::span<co
   const RenderWorld& world = shared_.context_.world;
   RenderStats& stats = *point_.stats;
   const std::size_t m = ends.size();
-  const CorrectionProbabilities q = connection_corrections_;
+  const CorrectionProbabilities q = connection_corrections();
   // 1. The exactly traced part (own instance, instances without sphere sets), where no
   //    convex shell clears it.
   blocked_.assign(m, 0);
@@ -191,8 +194,23 @@ void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
   if (shared_.pixel_evidence_.empty()) return;
   CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
   evidence.add(proxy_blocked, mesh_blocked);
-  corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
-  connection_corrections_ = correction_probabilities(ProxyKind::general, evidence, shared_.options_);
+  corrections_stale_ = connection_corrections_stale_ = true;
+}
+
+const CorrectionProbabilities& ControlVariatePoint::light_corrections() {
+  if (corrections_stale_) {
+    corrections_ = correction_probabilities(kind_, shared_.pixel_evidence_[point_.pixel], shared_.options_);
+    corrections_stale_ = false;
+  }
+  return corrections_;
+}
+
+const CorrectionProbabilities& ControlVariatePoint::connection_corrections() {
+  if (connection_corrections_stale_) {
+    connection_corrections_ = correction_probabilities(ProxyKind::general, shared_.pixel_evidence_[point_.pixel], shared_.options_);
+    connection_corrections_stale_ = false;
+  }
+  return connection_corrections_;
 }
 
 double ControlVariatePoint::disk_answer(const Vertex& end, const CorrectionProbabilities& q) {

@@ -9,10 +9,10 @@ namespace visproxy {
 
 double stochastic_visibility(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
                              const Probabilities& p, double u, bool split, RenderStats& stats, bool own_cannot_block) {
-  const std::optional<InstanceFilter> rest = trace_own_instance(world, from, to, own_instance, split, stats, own_cannot_block);
-  if (!rest) return 0.0;
-  ++stats.proxy_tests;
-  const bool proxy_free = !world.proxy_blocks(from, to, *rest);
+  const ProxyAnswer answer = proxy_answer(world, from, to, own_instance, split, stats, own_cannot_block);
+  if (answer.own_blocks) return 0.0;
+  const bool proxy_free = !answer.proxy_blocked;
+  const InstanceFilter& rest = answer.rest;
   if (u < p.p1) {
     ++stats.eq8.terms[0];
     return proxy_free ? 1.0 / p.p1 : 0.0;
@@ -21,12 +21,12 @@ double stochastic_visibility(const RenderWorld& world, const Vertex& from, const
     ++stats.eq8.terms[1];
     if (proxy_free) return 0.0;
     ++stats.exact_tests;
-    return world.mesh_blocks(from, to, *rest) ? 0.0 : 1.0 / p.p2;
+    return world.mesh_blocks(from, to, rest) ? 0.0 : 1.0 / p.p2;
   }
   ++stats.eq8.terms[2];
   if (!proxy_free) return 0.0;
   ++stats.exact_tests;
-  return world.mesh_blocks(from, to, *rest) ? -1.0 / p.p3 : 0.0;
+  return world.mesh_blocks(from, to, rest) ? -1.0 / p.p3 : 0.0;
 }
 
 namespace {

@@ -2,16 +2,19 @@
 
 namespace visproxy {
 
-std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
-                                                 bool split, RenderStats& stats, bool own_cannot_block) {
-  InstanceFilter rest;
-  if (!split) return rest;
-  if (!own_cannot_block) {
-    ++stats.exact_tests;
-    if (world.mesh_blocks(from, to, {.skip = -1, .only = own_instance})) return std::nullopt;
+ProxyAnswer proxy_answer(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance, bool split,
+                         RenderStats& stats, bool own_cannot_block) {
+  ProxyAnswer answer;
+  if (!split) {
+    ++stats.proxy_tests;
+    answer.proxy_blocked = world.proxy_blocks(from, to);
+    return answer;
   }
-  rest.skip = own_instance;
-  return rest;
+  const SplitAnswer split_answer = world.split_blocks(from, to, own_instance, !own_cannot_block, stats.exact_tests, stats.proxy_tests);
+  answer.own_blocks = split_answer == SplitAnswer::own_blocks;
+  answer.proxy_blocked = split_answer == SplitAnswer::proxy_blocks;
+  answer.rest.skip = own_instance;
+  return answer;
 }
 
 void ExactConnections::begin(const RenderWorld& world, const Vertex& from, unsigned bits) {

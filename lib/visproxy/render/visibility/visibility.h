@@ -104,10 +104,16 @@ ControlVariateSample control_variate_visibility(const RenderWorld& world, const 
                                                 const CorrectionProbabilities& q, double u, bool split, RenderStats& stats,
                                                 bool own_cannot_block = false);
 
-/// With splitting, the own instance first (exactly); returns the filter for the rest of
-/// the scene, or nullopt when the own instance blocks the segment.
-std::optional<InstanceFilter> trace_own_instance(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance,
-                                                 bool split, RenderStats& stats, bool own_cannot_block);
+/// The proxy's answer for a shadow segment, as eq. 8 and the control variate ask it: with
+/// `split`, the own instance exactly (unless `own_cannot_block`) and the rest of the scene
+/// through its proxies (RenderWorld::split_blocks); without, every instance's proxy.
+struct ProxyAnswer {
+  bool own_blocks = false;     ///< the own instance blocked the segment: V = 0, the proxies were not asked
+  bool proxy_blocked = false;  ///< V' of the rest of the scene (or of the whole scene without split)
+  InstanceFilter rest;         ///< what the proxies stood for: the exact geometry a correction traces
+};
+ProxyAnswer proxy_answer(const RenderWorld& world, const Vertex& from, const Vertex& to, int own_instance, bool split,
+                         RenderStats& stats, bool own_cannot_block);
 
 }  // namespace visproxy
 

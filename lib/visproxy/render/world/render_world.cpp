@@ -133,6 +133,9 @@ struct RenderWorld::Impl {
   std::vector<RTCScene> owned;  // released at the end
   std::vector<std::vector<Sphere>> sphere_storage;  // moved vectors keep their buffers
   RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
+  // Per instance (RenderWorldOptions::split_scenes): its own mesh and the other instances'
+  // stochastic proxies as traced in `proxy` (its clipped convex proxies stay there).
+  std::vector<RTCScene> split_scenes;
   std::vector<Eigen::Matrix3d> normal_matrices;  // per instance, object to world normals
   std::vector<Eigen::Affine3d> instance_transforms;  // per instance, object to world points
   std::vector<int> light_of_triangle;
@@ -568,6 +571,13 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     return proxy_scenes.emplace(key, w.object_scene(p.mesh, p.spheres, mesh_center[name])).first->second;
   };
 
+  // Per instance: its mesh's object scene, what `proxy` traces of it (null: clipped), and
+  // where both are placed.
+  struct SplitPart {
+    RTCScene mesh = nullptr, proxy = nullptr;
+    Eigen::Affine3d object_to_world;
+  };
+  std::vector<SplitPart> split_parts;
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {
     const SceneInstance& instance = scene.instances[i];
     const SceneMesh& mesh = scene.mesh(instance.mesh);
@@ -617,8 +627,11 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
         kind = ProxyKind::general;
       }
       add_proxy(w.proxy, prepared);
+      split_parts.push_back({mesh_scene(instance.mesh), prepared.polytope ? nullptr : proxy_scene(instance.mesh, prepared),
+                             object_to_world});
     } else {
       w.add_instance(w.proxy, mesh_scene(instance.mesh), object_to_world, id, mask);
+      split_parts.push_back({mesh_scene(instance.mesh), mesh_scene(instance.mesh), object_to_world});
     }
     w.is_exact.push_back(!p.stochastic.has_value());
     std::vector<Sphere> occluders;
@@ -717,6 +730,19 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
   }
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
+  // Split scenes: instance `own` as its mesh, every other as in `proxy`. They share the
+  // object scenes; only their top levels are new.
+  if (options.split_scenes && !w.counting && scene.instances.size() <= kSplitScenesUpTo)
+    for (std::size_t own = 0; own < scene.instances.size(); ++own) {
+      RTCScene top = w.top_scene();
+      for (std::size_t j = 0; j < scene.instances.size(); ++j) {
+        const SplitPart& part = split_parts[j];
+        RTCScene object = j == own ? part.mesh : part.proxy;
+        if (object) w.add_instance(top, object, part.object_to_world, static_cast<unsigned>(j), instance_mask(j));
+      }
+      rtcCommitScene(top);
+      w.split_scenes.push_back(top);
+    }
   w.device.throw_if_failed();
   for (const auto& [top, solids] : w.convex) {
     if (solids.size() < Impl::kConvexTreeFrom) continue;
@@ -829,6 +855,32 @@ bool RenderWorld::outside_blocks(const Vertex& from, const Vertex& to, InstanceF
 }
 bool RenderWorld::inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter) const {
   return impl_->has_inside && impl_->blocked(impl_->inside, from, to, filter);
+}
+
+bool RenderWorld::has_split_scene(int own) const {
+  return own >= 0 && static_cast<std::size_t>(own) < impl_->split_scenes.size();
+}
+
+SplitAnswer RenderWorld::split_blocks(const Vertex& from, const Vertex& to, int own, bool trace_own, std::uint64_t& exact_queries,
+                                      std::uint64_t& proxy_queries) const {
+  const Impl& w = *impl_;
+  const InstanceFilter own_only{.skip = -1, .only = own}, rest{.skip = own, .only = -1};
+  if (trace_own && has_split_scene(own)) {
+    // One traversal of the own mesh and the others' traced proxies; their clipped proxies first.
+    ++proxy_queries;
+    const bool clipped = w.any_convex(w.proxy, from, to, [&](const ConvexInstance& instance) {
+      return filter_passes(instance.id, rest) && instance.world.meets_segment(from, to);
+    });
+    if (!clipped && !w.blocked(w.split_scenes[static_cast<std::size_t>(own)], from, to, {})) return SplitAnswer::clear;
+    ++exact_queries;
+    return w.blocked(w.camera, from, to, own_only) ? SplitAnswer::own_blocks : SplitAnswer::proxy_blocks;
+  }
+  if (trace_own) {
+    ++exact_queries;
+    if (w.blocked(w.camera, from, to, own_only)) return SplitAnswer::own_blocks;
+  }
+  ++proxy_queries;
+  return w.blocked(w.proxy, from, to, rest) ? SplitAnswer::proxy_blocks : SplitAnswer::clear;
 }
 
 ProxyKind RenderWorld::stochastic_kind(int skip) const {

@@ -99,6 +99,24 @@ struct RenderWorldOptions {
   /// Keep each instance's geometry in world space for proofs about whole shafts and cones
   /// (instance_solids(): lightcuts' cluster bounds). Off by default: it copies every mesh.
   bool keep_solids = false;
+  /// For scenes of at most kSplitScenesUpTo instances: per instance, a top scene of its own
+  /// mesh and every other instance's stochastic proxy, so that split_blocks() answers most
+  /// segments with one traversal (split_blocks() answers the same without them). Not built
+  /// for counting worlds, nor without ray masks.
+  bool split_scenes = true;
+};
+
+/// The most instances for which RenderWorld builds split scenes (one per instance, each
+/// holding every instance once).
+inline constexpr std::size_t kSplitScenesUpTo = 31;
+
+/// What blocks a shadow segment from a point on an instance, when the instance's own mesh
+/// is traced exactly and the rest of the scene through its stochastic proxies (visibility
+/// splitting, eq. 27 of Billen et al.).
+enum class SplitAnswer {
+  clear,         ///< neither the own mesh nor another instance's proxy
+  own_blocks,    ///< the own mesh (the proxies were not asked)
+  proxy_blocks,  ///< another instance's proxy, and not the own mesh
 };
 
 /// What proofs about a shaft or a cone of segments (rather than one segment) may use of an
@@ -185,6 +203,16 @@ class RenderWorld {
   /// conservative for segments that end on a light.
   bool outside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
   bool inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
+  /// The segment from a point on instance `own` against its own mesh (unless `trace_own` is
+  /// false: the caller knows the mesh cannot block it) and the stochastic proxies of the
+  /// other instances. The answer is that of mesh_blocks(own only) followed, if clear, by
+  /// proxy_blocks(skip own); with split scenes a clear segment takes one traversal in
+  /// place of two, and a blocked one asks the own mesh alone which of the two it was.
+  /// `exact_queries` and `proxy_queries` count the queries made (the joint one as a proxy query).
+  SplitAnswer split_blocks(const Vertex& from, const Vertex& to, int own, bool trace_own, std::uint64_t& exact_queries,
+                           std::uint64_t& proxy_queries) const;
+  /// Whether split_blocks() has a split scene for instance `own`.
+  bool has_split_scene(int own) const;
 
   /// The kind of the union of every instance's stochastic proxy except `skip`'s: outside
   /// (inside) when each is a usable outside (inside) proxy or exact, general otherwise.
