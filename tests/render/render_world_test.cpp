@@ -672,14 +672,18 @@ Scene split_test_scene(const Vertex& shift, std::vector<MeshProxies>& proxies) {
     balls.push_back({Vertex(std::cos(angle), std::sin(angle), 0), 0.3});
   }
   proxies[2].stochastic = InstanceProxy{ProxyKind::general, "spheres:12", {}, balls, false};
+  // Outside proxies for bounds: the box (clipped) and a ball of 320 faces (traced).
+  proxies[0].outside = proxies[0].stochastic;
+  proxies[1].outside = InstanceProxy{ProxyKind::outside, "ball", sphere_set_mesh({{{0, 0, 0}, 1.5}}, 2), {}, true};
   return scene;  // instances 3 (a ring) and 4 (the floor) have no proxy: traced exactly
 }
 
-// Split scenes answer every segment as the own mesh and then the other instances' proxies
-// would, one by one, on segments from points near and inside the tori and below the floor (own mesh blocking,
-// a proxy blocking, both, neither), near the origin and 10^6 away from it; a clear segment
-// costs one query instead of two. Beyond kSplitScenesUpTo instances, and in counting
-// worlds, there are no split scenes and the answers are the same.
+// Split scenes answer every segment as the own mesh and then the other instances'
+// stochastic or outside proxies would, one by one, on segments from points near and inside
+// the tori and below the floor (own mesh blocking, a proxy blocking, both, neither), near
+// the origin and 10^6 away from it; a clear segment costs one query instead of two. Beyond
+// kSplitScenesUpTo instances, and in counting worlds, there are no split scenes and the
+// answers are the same.
 TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
   for (const Vertex& shift : {Vertex(0, 0, 0), Vertex(1e6, -1e6, 5e5)}) {
     std::vector<MeshProxies> proxies;
@@ -690,28 +694,34 @@ TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
     for (int own = 0; own < static_cast<int>(scene.instances.size()); ++own) {
       EXPECT_TRUE(split.has_split_scene(own));
       EXPECT_FALSE(plain.has_split_scene(own));
-      std::array<int, 3> seen{};
+      std::array<std::array<int, 3>, 2> seen{};  // per role and answer
       for (int k = 0; k < 3000; ++k) {
         const Vertex from = shift + Vertex(uniform(-3.5, 3.5), uniform(-3.5, 3.5), uniform(-1.4, 1.2));  // some below the floor
         const Vertex to = shift + Vertex(uniform(-0.7, 0.7), uniform(-0.7, 0.7), 3.99);
-        for (const bool trace_own : {true, false}) {
-          SplitAnswer expected = SplitAnswer::clear;
-          if (trace_own && plain.mesh_blocks(from, to, {.skip = -1, .only = own}))
-            expected = SplitAnswer::own_blocks;
-          else if (plain.proxy_blocks(from, to, {.skip = own, .only = -1}))
-            expected = SplitAnswer::proxy_blocks;
-          std::uint64_t exact = 0, proxy = 0, plain_exact = 0, plain_proxy = 0;
-          ASSERT_EQ(split.split_blocks(from, to, own, trace_own, exact, proxy), expected) << own << " " << k;
-          ASSERT_EQ(plain.split_blocks(from, to, own, trace_own, plain_exact, plain_proxy), expected) << own << " " << k;
-          if (trace_own) ++seen[static_cast<std::size_t>(expected)];
-          if (trace_own && expected == SplitAnswer::clear) {
-            EXPECT_EQ(exact + proxy, 1u);
-            EXPECT_EQ(plain_exact + plain_proxy, 2u);
+        // Bounds asks for the outside proxies of some instances only (those its light shaft meets).
+        const unsigned some = static_cast<unsigned>(random.uniform() * 32) | instance_bit(1);
+        for (const SplitProxies role : {SplitProxies::stochastic, SplitProxies::outside})
+          for (const bool trace_own : {true, false}) {
+            const unsigned bits = role == SplitProxies::outside && k % 2 == 1 ? some : InstanceFilter{}.bits;
+            const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
+            SplitAnswer expected = SplitAnswer::clear;
+            if (trace_own && plain.mesh_blocks(from, to, {.skip = -1, .only = own}))
+              expected = SplitAnswer::own_blocks;
+            else if (role == SplitProxies::stochastic ? plain.proxy_blocks(from, to, rest) : plain.outside_blocks(from, to, rest))
+              expected = SplitAnswer::proxy_blocks;
+            std::uint64_t exact = 0, proxy = 0, plain_exact = 0, plain_proxy = 0;
+            ASSERT_EQ(split.split_blocks(from, to, own, trace_own, exact, proxy, role, bits), expected) << own << " " << k;
+            ASSERT_EQ(plain.split_blocks(from, to, own, trace_own, plain_exact, plain_proxy, role, bits), expected) << own << " " << k;
+            if (trace_own) ++seen[static_cast<std::size_t>(role)][static_cast<std::size_t>(expected)];
+            if (trace_own && expected == SplitAnswer::clear) {
+              EXPECT_EQ(exact + proxy, 1u);
+              EXPECT_EQ(plain_exact + plain_proxy, 2u);
+            }
           }
-        }
       }
       // Every answer was met, so the comparison covered each path.
-      for (const int count : seen) EXPECT_GT(count, 20) << "instance " << own;
+      for (const auto& role : seen)
+        for (const int count : role) EXPECT_GT(count, 20) << "instance " << own;
     }
     // The control variate and eq. 8 with splitting render the same images either way.
     for (const StochasticEstimator estimator : {StochasticEstimator::control_variate, StochasticEstimator::term_choice}) {
@@ -719,6 +729,16 @@ TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
       const RenderResult a = render(scene, split, options), b = render(scene, plain, options);
       EXPECT_EQ(a.image.pixels, b.image.pixels);
       EXPECT_LT(a.stats.exact_tests + a.stats.proxy_tests, b.stats.exact_tests + b.stats.proxy_tests);
+    }
+    // Bounds gives exact's image with either world, with fewer queries through the joint one.
+    for (const int shadow_rays : {1, 3}) {
+      const RenderOptions options{.spp = 4, .shadow_rays = shadow_rays, .seed = 9};
+      const auto [exact, joint] = testing::exact_and_bounds(scene, split, options);
+      const auto [unused, one_by_one] = testing::exact_and_bounds(scene, plain, options);
+      EXPECT_EQ(joint.image.pixels, exact.image.pixels);
+      EXPECT_EQ(one_by_one.image.pixels, exact.image.pixels);
+      EXPECT_GT(joint.stats.bounds.unoccluded, 100u);
+      EXPECT_LT(joint.stats.exact_tests + joint.stats.proxy_tests, one_by_one.stats.exact_tests + one_by_one.stats.proxy_tests);
     }
   }
   // No split scenes beyond kSplitScenesUpTo instances, nor when counting.

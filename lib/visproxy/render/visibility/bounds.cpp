@@ -80,12 +80,11 @@ void BoundsPoint::find_shaft() {
 }
 
 double BoundsPoint::to_light(const Vertex& end) {
-  // The rest of the scene first: free if the segment misses every other instance's outside
-  // proxy (only those the light shaft meets can be hit), blocked if it meets an inside
-  // proxy; otherwise one exact query over everything. When the rest is free, the own
-  // instance is traced unless it lies behind the tangent plane. After a segment from this
-  // point needed the exact query, the next ones go straight to it: the proxies rarely
-  // prove anything where they just failed to.
+  // The own mesh (unless it lies behind the tangent plane) and the rest of the scene's
+  // outside proxies: free if the segment misses both (only the instances the light shaft
+  // meets can be hit), blocked if it meets the own mesh or an inside proxy; otherwise one
+  // exact query. After a segment from this point needed the exact query, the next ones go
+  // straight to it: the proxies rarely prove anything where they just failed to.
   const RenderWorld& world = shared_.context_.world;
   RenderStats& stats = *point_.stats;
   const Vertex& x = point_.position;
@@ -105,17 +104,40 @@ double BoundsPoint::to_light(const Vertex& end) {
     }
   }
   const InstanceFilter rest{.skip = own, .only = -1, .bits = bits};
-  bool rest_free = bits == 0;
-  if (!rest_free && !traced_before_) {
-    ++stats.proxy_tests;
-    proof_tried_ = true;
-    rest_free = !world.outside_blocks(x, end, rest);
-  }
-  if (rest_free) {
+  const bool own_clear = point_.hit->own_mesh_clear_of(x, end);
+  if (bits == 0) {
     ++stats.bounds.unoccluded;
-    if (point_.hit->own_mesh_clear_of(x, end)) return 1;
+    if (own_clear) return 1;
     ++stats.exact_tests;
     return world.mesh_blocks(x, end, {.skip = -1, .only = own}) ? 0 : 1;
+  }
+  bool own_known_clear = false;  // the rest is then all an exact query must trace
+  if (!traced_before_) {
+    proof_tried_ = true;
+    if (world.has_split_scene(own)) {
+      // One traversal of the own mesh and the rest's outside proxies: the own mesh
+      // blocking answers, as a clear segment does.
+      const SplitAnswer answer =
+          world.split_blocks(x, end, own, !own_clear, stats.exact_tests, stats.proxy_tests, SplitProxies::outside, bits);
+      if (answer == SplitAnswer::own_blocks) {
+        ++stats.bounds.traced;
+        return 0;
+      }
+      if (answer == SplitAnswer::clear) {
+        ++stats.bounds.unoccluded;
+        return 1;
+      }
+      own_known_clear = true;
+    } else {
+      // Among many instances: the rest's outside proxies first, then the own mesh.
+      ++stats.proxy_tests;
+      if (!world.outside_blocks(x, end, rest)) {
+        ++stats.bounds.unoccluded;
+        if (own_clear) return 1;
+        ++stats.exact_tests;
+        return world.mesh_blocks(x, end, {.skip = -1, .only = own}) ? 0 : 1;
+      }
+    }
   }
   if (world.has_inside_proxies() && !traced_before_) {
     ++stats.proxy_tests;
@@ -124,11 +146,12 @@ double BoundsPoint::to_light(const Vertex& end) {
       return 0;
     }
   }
+  const InstanceFilter traced = own_known_clear ? InstanceFilter{.skip = own, .only = -1} : InstanceFilter{};
   proof_failed_ = proof_failed_ || !traced_before_;
   traced_before_ = true;
   ++stats.bounds.traced;
   ++stats.exact_tests;
-  return world.mesh_blocks(x, end) ? 0 : 1;
+  return world.mesh_blocks(x, end, traced) ? 0 : 1;
 }
 
 // The proofs of traced proxies need one end of the segment on a light: connections to

@@ -134,8 +134,9 @@ struct RenderWorld::Impl {
   std::vector<std::vector<Sphere>> sphere_storage;  // moved vectors keep their buffers
   RTCScene camera = nullptr, proxy = nullptr, outside = nullptr, inside = nullptr;
   // Per instance (RenderWorldOptions::split_scenes): its own mesh and the other instances'
-  // stochastic proxies as traced in `proxy` (its clipped convex proxies stay there).
-  std::vector<RTCScene> split_scenes;
+  // stochastic (outside) proxies as traced in `proxy` (`outside`); their clipped convex
+  // proxies stay there.
+  std::vector<RTCScene> split_scenes, split_outside_scenes;
   std::vector<Eigen::Matrix3d> normal_matrices;  // per instance, object to world normals
   std::vector<Eigen::Affine3d> instance_transforms;  // per instance, object to world points
   std::vector<int> light_of_triangle;
@@ -571,10 +572,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     return proxy_scenes.emplace(key, w.object_scene(p.mesh, p.spheres, mesh_center[name])).first->second;
   };
 
-  // Per instance: its mesh's object scene, what `proxy` traces of it (null: clipped), and
-  // where both are placed.
+  // Per instance: its mesh's object scene, what `proxy` and `outside` trace of it (null:
+  // clipped), and where they are placed.
   struct SplitPart {
-    RTCScene mesh = nullptr, proxy = nullptr;
+    RTCScene mesh = nullptr, proxy = nullptr, outside = nullptr;
     Eigen::Affine3d object_to_world;
   };
   std::vector<SplitPart> split_parts;
@@ -628,10 +629,10 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       }
       add_proxy(w.proxy, prepared);
       split_parts.push_back({mesh_scene(instance.mesh), prepared.polytope ? nullptr : proxy_scene(instance.mesh, prepared),
-                             object_to_world});
+                             nullptr, object_to_world});
     } else {
       w.add_instance(w.proxy, mesh_scene(instance.mesh), object_to_world, id, mask);
-      split_parts.push_back({mesh_scene(instance.mesh), mesh_scene(instance.mesh), object_to_world});
+      split_parts.push_back({mesh_scene(instance.mesh), mesh_scene(instance.mesh), nullptr, object_to_world});
     }
     w.is_exact.push_back(!p.stochastic.has_value());
     std::vector<Sphere> occluders;
@@ -658,6 +659,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       const PreparedProxy& prepared = prepared_for(instance.mesh, *p.outside);
       if (prepared.kind == ProxyKind::outside && traced_outside_usable(prepared)) {
         add_proxy(w.outside, prepared);
+        if (!prepared.polytope) split_parts.back().outside = proxy_scene(instance.mesh, prepared);
         outside_added = true;
         if (w.keep_solids) {
           solids.outside = transformed_mesh(prepared.mesh, instance.transform);
@@ -676,7 +678,7 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       if (it->second)
         w.convex[w.outside].push_back({id, it->second->transformed(instance.transform).grown(pad_world)});
       else
-        w.add_instance(w.outside, mesh_scene(instance.mesh), object_to_world, id, mask);
+        w.add_instance(w.outside, mesh_scene(instance.mesh), object_to_world, id, mask), split_parts.back().outside = mesh_scene(instance.mesh);
       if (w.keep_solids && it->second) keep_planes(*it->second);
     }
 
@@ -730,19 +732,20 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     if (id != static_cast<unsigned>(scene.instances.size())) throw Error("render: unexpected light geometry id");
   }
   for (RTCScene top : {w.camera, w.proxy, w.outside, w.inside}) rtcCommitScene(top);
-  // Split scenes: instance `own` as its mesh, every other as in `proxy`. They share the
-  // object scenes; only their top levels are new.
+  // Split scenes: instance `own` as its mesh, every other as in `proxy` (`outside`). They
+  // share the object scenes; only their top levels are new.
   if (options.split_scenes && !w.counting && scene.instances.size() <= kSplitScenesUpTo)
-    for (std::size_t own = 0; own < scene.instances.size(); ++own) {
-      RTCScene top = w.top_scene();
-      for (std::size_t j = 0; j < scene.instances.size(); ++j) {
-        const SplitPart& part = split_parts[j];
-        RTCScene object = j == own ? part.mesh : part.proxy;
-        if (object) w.add_instance(top, object, part.object_to_world, static_cast<unsigned>(j), instance_mask(j));
+    for (std::size_t own = 0; own < scene.instances.size(); ++own)
+      for (const SplitProxies role : {SplitProxies::stochastic, SplitProxies::outside}) {
+        RTCScene top = w.top_scene();
+        for (std::size_t j = 0; j < scene.instances.size(); ++j) {
+          const SplitPart& part = split_parts[j];
+          RTCScene object = j == own ? part.mesh : role == SplitProxies::stochastic ? part.proxy : part.outside;
+          if (object) w.add_instance(top, object, part.object_to_world, static_cast<unsigned>(j), instance_mask(j));
+        }
+        rtcCommitScene(top);
+        (role == SplitProxies::stochastic ? w.split_scenes : w.split_outside_scenes).push_back(top);
       }
-      rtcCommitScene(top);
-      w.split_scenes.push_back(top);
-    }
   w.device.throw_if_failed();
   for (const auto& [top, solids] : w.convex) {
     if (solids.size() < Impl::kConvexTreeFrom) continue;
@@ -862,16 +865,21 @@ bool RenderWorld::has_split_scene(int own) const {
 }
 
 SplitAnswer RenderWorld::split_blocks(const Vertex& from, const Vertex& to, int own, bool trace_own, std::uint64_t& exact_queries,
-                                      std::uint64_t& proxy_queries) const {
+                                      std::uint64_t& proxy_queries, SplitProxies proxies, unsigned rest_bits) const {
   const Impl& w = *impl_;
-  const InstanceFilter own_only{.skip = -1, .only = own}, rest{.skip = own, .only = -1};
+  RTCScene rest_scene = proxies == SplitProxies::stochastic ? w.proxy : w.outside;
+  const InstanceFilter own_only{.skip = -1, .only = own}, rest{.skip = own, .only = -1, .bits = rest_bits};
   if (trace_own && has_split_scene(own)) {
-    // One traversal of the own mesh and the others' traced proxies; their clipped proxies first.
+    // One traversal of the own mesh and the others' traced proxies (the instance bits are
+    // unique here); their clipped proxies first.
     ++proxy_queries;
-    const bool clipped = w.any_convex(w.proxy, from, to, [&](const ConvexInstance& instance) {
+    const bool clipped = w.any_convex(rest_scene, from, to, [&](const ConvexInstance& instance) {
       return filter_passes(instance.id, rest) && instance.world.meets_segment(from, to);
     });
-    if (!clipped && !w.blocked(w.split_scenes[static_cast<std::size_t>(own)], from, to, {})) return SplitAnswer::clear;
+    const auto index = static_cast<std::size_t>(own);
+    RTCScene joint = proxies == SplitProxies::stochastic ? w.split_scenes[index] : w.split_outside_scenes[index];
+    if (!clipped && !w.blocked(joint, from, to, {.skip = -1, .only = -1, .bits = rest_bits | instance_mask(index)}))
+      return SplitAnswer::clear;
     ++exact_queries;
     return w.blocked(w.camera, from, to, own_only) ? SplitAnswer::own_blocks : SplitAnswer::proxy_blocks;
   }
@@ -880,7 +888,7 @@ SplitAnswer RenderWorld::split_blocks(const Vertex& from, const Vertex& to, int 
     if (w.blocked(w.camera, from, to, own_only)) return SplitAnswer::own_blocks;
   }
   ++proxy_queries;
-  return w.blocked(w.proxy, from, to, rest) ? SplitAnswer::proxy_blocks : SplitAnswer::clear;
+  return w.blocked(rest_scene, from, to, rest) ? SplitAnswer::proxy_blocks : SplitAnswer::clear;
 }
 
 ProxyKind RenderWorld::stochastic_kind(int skip) const {

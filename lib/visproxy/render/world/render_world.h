@@ -99,10 +99,10 @@ struct RenderWorldOptions {
   /// Keep each instance's geometry in world space for proofs about whole shafts and cones
   /// (instance_solids(): lightcuts' cluster bounds). Off by default: it copies every mesh.
   bool keep_solids = false;
-  /// For scenes of at most kSplitScenesUpTo instances: per instance, a top scene of its own
-  /// mesh and every other instance's stochastic proxy, so that split_blocks() answers most
-  /// segments with one traversal (split_blocks() answers the same without them). Not built
-  /// for counting worlds, nor without ray masks.
+  /// For scenes of at most kSplitScenesUpTo instances: per instance, top scenes of its own
+  /// mesh and every other instance's stochastic (and outside) proxy, so that split_blocks()
+  /// answers most segments with one traversal (split_blocks() answers the same without
+  /// them). Not built for counting worlds.
   bool split_scenes = true;
 };
 
@@ -118,6 +118,10 @@ enum class SplitAnswer {
   own_blocks,    ///< the own mesh (the proxies were not asked)
   proxy_blocks,  ///< another instance's proxy, and not the own mesh
 };
+
+/// Which proxies of the other instances split_blocks() asks: their stochastic proxies (as
+/// proxy_blocks), or their outside proxies (as outside_blocks).
+enum class SplitProxies { stochastic, outside };
 
 /// What proofs about a shaft or a cone of segments (rather than one segment) may use of an
 /// instance, in world space, after the same checks the segment proofs make. Every
@@ -204,13 +208,15 @@ class RenderWorld {
   bool outside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
   bool inside_blocks(const Vertex& from, const Vertex& to, InstanceFilter filter = {}) const;
   /// The segment from a point on instance `own` against its own mesh (unless `trace_own` is
-  /// false: the caller knows the mesh cannot block it) and the stochastic proxies of the
-  /// other instances. The answer is that of mesh_blocks(own only) followed, if clear, by
-  /// proxy_blocks(skip own); with split scenes a clear segment takes one traversal in
-  /// place of two, and a blocked one asks the own mesh alone which of the two it was.
-  /// `exact_queries` and `proxy_queries` count the queries made (the joint one as a proxy query).
+  /// false: the caller knows the mesh cannot block it) and the other instances' proxies of
+  /// `proxies` among `rest_bits` (instance_bit()s). The answer is that of mesh_blocks(own
+  /// only) followed, if clear, by proxy_blocks or outside_blocks with {skip own, rest_bits};
+  /// with split scenes a clear segment takes one traversal in place of two, and a blocked
+  /// one asks the own mesh alone which of the two it was. `exact_queries` and
+  /// `proxy_queries` count the queries made (the joint one as a proxy query).
   SplitAnswer split_blocks(const Vertex& from, const Vertex& to, int own, bool trace_own, std::uint64_t& exact_queries,
-                           std::uint64_t& proxy_queries) const;
+                           std::uint64_t& proxy_queries, SplitProxies proxies = SplitProxies::stochastic,
+                           unsigned rest_bits = 0x7FFFFFFFu) const;
   /// Whether split_blocks() has a split scene for instance `own`.
   bool has_split_scene(int own) const;
 
