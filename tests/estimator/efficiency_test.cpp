@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -251,6 +252,49 @@ TEST(RenderEfficiency, IsAmdahlsLawWithTheVarianceRatio) {
     EXPECT_LE(e, 3.0 + 1e-12);
     previous = e;
   }
+}
+
+// The variance each use adds per ray type, weighted by the type fractions and added to
+// Var(V), is the use's whole variance (eq. 14 for eq. 8, the control variate's formula), on
+// random fractions and probabilities; a type the setting cannot estimate adds +infinity,
+// and a render whose changed segments carry no weight keeps its noise.
+TEST(RenderNoise, TheVarianceAddedPerRayTypeSumsToTheEstimatorsVariance) {
+  Random random(41);
+  for (int trial = 0; trial < 200; ++trial) {
+    RayTypeFractions fractions;
+    double total = 0;
+    for (double& f : fractions.f) total += (f = random.uniform());
+    for (double& f : fractions.f) f /= total;
+    const double v = fractions.v_avg();
+    UseSetting setting;
+    const double a = 0.05 + 0.9 * random.uniform(), b = 0.05 + (0.95 - a) * random.uniform();
+    setting.term = {a, b, 1 - a - b};
+    setting.correction = {0.05 + 0.95 * random.uniform(), 0.05 + 0.95 * random.uniform()};
+    for (const ProxyUse use : {ProxyUse::term_choice, ProxyUse::control_variate, ProxyUse::bounds}) {
+      const std::array<double, 4> added = added_variance_by_type(use, setting);
+      double sum = v * (1 - v);
+      for (std::size_t t = 0; t < 4; ++t) sum += fractions.f[t] * added[t];
+      const double expected = use == ProxyUse::term_choice       ? estimator_variance(fractions, setting.term)
+                              : use == ProxyUse::control_variate ? control_variate_variance(fractions, setting.correction)
+                                                                 : v * (1 - v);
+      EXPECT_NEAR(sum, expected, 1e-9 * (1 + expected)) << use_name(use) << " trial " << trial;
+    }
+  }
+  UseSetting outside;
+  outside.term = equal_probabilities(ProxyKind::outside);  // p3 = 0: type 2 cannot be estimated
+  outside.correction = equal_correction_probabilities(ProxyKind::outside);
+  EXPECT_TRUE(std::isinf(added_variance_by_type(ProxyUse::term_choice, outside)[1]));
+  EXPECT_TRUE(std::isinf(added_variance_by_type(ProxyUse::control_variate, outside)[1]));
+  // ... which a proved outside proxy never meets: its weight is 0 and it adds nothing.
+  const std::array<double, 4> no_type_2 = {0.2, 0, 0.1, 0.3};
+  const double ratio = render_variance_ratio(no_type_2, added_variance_by_type(ProxyUse::term_choice, outside), 0.5);
+  EXPECT_DOUBLE_EQ(ratio, 1 + (0.1 * (2 - 1) + 0.3 * (2 - 1)) / 0.5);
+  EXPECT_EQ(render_variance_ratio({0, 0, 0, 0}, added_variance_by_type(ProxyUse::term_choice, outside), 0.0), 1.0);
+  EXPECT_TRUE(std::isinf(render_variance_ratio(no_type_2, added_variance_by_type(ProxyUse::term_choice, outside), 0.0)));
+  // Amdahl's law on the time, the render's own ratio on the noise.
+  EXPECT_DOUBLE_EQ(render_efficiency_of(0.5, 1.0, 0.4), 1 / (0.6 + 0.2));
+  EXPECT_DOUBLE_EQ(render_efficiency_of(0.5, 2.0, 0.4), 1 / (2 * (0.6 + 0.2)));
+  EXPECT_EQ(render_efficiency_of(0.5, std::numeric_limits<double>::infinity(), 0.4), 0.0);
 }
 
 // A simulated render: each sample's value is X V, with X the rest of the sample's noise

@@ -182,6 +182,38 @@ double render_efficiency(double ray_efficiency, double variance_ratio, double sh
   return time_and_noise > 0 ? 1 / time_and_noise : kInfinity;
 }
 
+std::array<double, 4> added_variance_by_type(ProxyUse use, const UseSetting& setting) {
+  const auto inverse = [](double p) { return p > 0 ? 1 / p : kInfinity; };
+  switch (use) {
+    case ProxyUse::term_choice: {
+      const Probabilities& p = setting.term;
+      return {0, inverse(p.p1) + inverse(p.p3), inverse(p.p2) - 1, inverse(p.p1) - 1};
+    }
+    case ProxyUse::control_variate: {
+      const CorrectionProbabilities& q = setting.correction;
+      return {0, inverse(q.after_miss) - 1, inverse(q.after_hit) - 1, 0};
+    }
+    case ProxyUse::bounds:
+      break;
+  }
+  return {0, 0, 0, 0};
+}
+
+double render_variance_ratio(const std::array<double, 4>& weighted, const std::array<double, 4>& added, double exact) {
+  double sum = 0;
+  for (std::size_t t = 0; t < 4; ++t)
+    if (weighted[t] > 0) sum += weighted[t] * added[t];
+  if (!(sum > 0)) return 1;
+  return exact > 0 ? 1 + sum / exact : kInfinity;
+}
+
+double render_efficiency_of(double cost_ratio, double render_variance_ratio, double share) {
+  if (!(render_variance_ratio > 0) || std::isinf(render_variance_ratio) || !(cost_ratio >= 0)) return 0;
+  const double s = std::clamp(share, 0.0, 1.0);
+  const double time = (1 - s) + s * cost_ratio;
+  return time > 0 ? 1 / (render_variance_ratio * time) : kInfinity;
+}
+
 Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts& counts, const TraceCosts& costs,
                              const UseSetting& setting, std::uint64_t seed, int draws) {
   Random random(seed);

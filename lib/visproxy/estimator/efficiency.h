@@ -24,6 +24,7 @@
 // one at least `floor` (as the renderer's adaptive and learned probabilities are), and a
 // zero only where the proved kind makes it unbiased.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -99,6 +100,31 @@ UsePrediction predict_use(ProxyUse use, ProxyKind proved, const RayTypeFractions
 /// At share 1 it is ray_efficiency; at share 0, 1 / variance_ratio. 0 when ray_efficiency
 /// is 0 or the variance ratio unbounded.
 double render_efficiency(double ray_efficiency, double variance_ratio, double share);
+
+/// The variance a use adds, over the exact answer, to the estimate of a shadow segment of
+/// each ray type (index 0 is type 1, ..., 3 is type 4): E[V_est^2 | type] - V^2 under the
+/// use's setting:
+///   eq. 8:            {0, 1/p1 + 1/p3, 1/p2 - 1, 1/p1 - 1}
+///   control variate:  {0, 1/q_miss - 1, 1/q_hit - 1, 0}
+///   bounds:           {0, 0, 0, 0}
+/// +infinity where the type needs a probability that is 0 (the estimate would be biased
+/// for it; a proved kind rules such types out). Weighted by the type fractions and added
+/// to Var(V), it gives eq. 14 and the control variate's variance.
+std::array<double, 4> added_variance_by_type(ProxyUse use, const UseSetting& setting);
+
+/// The render's noise with a use over the exact render's: 1 + sum_t weighted[t] added[t] /
+/// exact, where weighted[t] is the mean, over a render's camera samples, of the squared
+/// contribution (per colour channel) of the samples whose shadow segment has type t, and
+/// `exact` the mean variance of one camera sample of the exact render within its pixel.
+/// Types without weight add nothing whatever their `added`; 1 when nothing is added.
+/// +infinity when something is added to a render without noise.
+double render_variance_ratio(const std::array<double, 4>& weighted, const std::array<double, 4>& added, double exact);
+
+/// A use's efficiency over a whole render from what it does to the render's time and noise:
+///     1 / (render_variance_ratio ((1 - share) + share cost_ratio)),
+/// `cost_ratio` being the use's cost per shadow ray over the mesh's and `share` the share
+/// of a sample's time the mesh's shadow tests take. 0 for an unbounded variance ratio.
+double render_efficiency_of(double cost_ratio, double render_variance_ratio, double share);
 
 struct Interval {
   double lower = 0;

@@ -195,6 +195,88 @@ json render_share(Scene& scene, const RenderWorld& world, double mesh_ns_per_ray
           {"share", share}};
 }
 
+// What the render's noise is made of, for predicting each use's noise over the whole
+// render (efficiency.h, render_variance_ratio): pairs of camera samples in one pixel as a
+// render takes them (scene_sample_pairs), the exact render's variance within a pixel from
+// their differences, and the segments a use estimates with their squared contributions.
+//  - Segments from other instances whose rest of the scene lets them through: the proxies
+//    stand in for the mesh there, and their ray types are the proxy's (per proxy).
+//  - Segments from the mesh's own instances: visibility splitting traces the own mesh
+//    exactly and estimates the rest of the scene, as of type 1 (blocked) or 4 (clear) when
+//    its estimate agrees with it. (Other instances of the mesh are taken for their mesh
+//    there: what their proxies would add is left out.) Eq. 8 still adds noise to type 4.
+struct RenderNoise {
+  std::size_t samples = 0;
+  double exact_variance = 0, exact_variance_error = 0;  // mean per sample, and its standard error
+  std::vector<Segment> segments;                        // from other instances, the rest of the scene clear
+  std::vector<double> squared;                          // their squared contribution, mean over channels
+  std::vector<std::uint8_t> mesh_blocked;
+  // From the mesh's instances: per ray type, the mean over samples of the squared
+  // contribution, and of its square.
+  std::array<double, 4> own{}, own_squares{};
+};
+
+constexpr std::size_t kNoisePairs = 20000;
+
+RenderNoise render_noise(const Scene& scene, const RenderWorld& world, const std::vector<bool>& mesh_instance,
+                         const RayScene& mesh_scene, std::uint64_t seed) {
+  // The rest of the scene: a world of the other instances only.
+  Scene rest = scene;
+  rest.instances.clear();
+  for (std::size_t i = 0; i < scene.instances.size(); ++i)
+    if (!mesh_instance[i]) rest.instances.push_back(scene.instances[i]);
+  std::optional<RenderWorld> rest_world;
+  if (!rest.instances.empty()) rest_world.emplace(rest, std::vector<MeshProxies>(rest.instances.size()));
+  RenderNoise noise;
+  double sum = 0, sum_squares = 0;
+  for (const std::array<CameraSample, 2>& pair : scene_sample_pairs(scene, world, kNoisePairs, seed ^ 0x6E6F697365ULL)) {
+    std::array<Color, 2> exact;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const CameraSample& sample = pair[k];
+      exact[k] = sample.emitted;
+      if (!sample.has_segment) continue;
+      const ShadowSegment& s = sample.segment;
+      if (!world.mesh_blocks(s.from, s.to)) exact[k] += sample.contribution;
+      if (mesh_instance[static_cast<std::size_t>(s.instance)]) {
+        const std::size_t type = world.mesh_blocks(s.from, s.to, {.skip = s.instance, .only = -1}) ? 0 : 3;
+        const double squared = sample.contribution.squaredNorm() / 3;
+        noise.own[type] += squared, noise.own_squares[type] += squared * squared;
+        continue;
+      }
+      if (rest_world && rest_world->mesh_blocks(s.from, s.to)) continue;
+      noise.segments.push_back({s.from, s.to});
+      noise.squared.push_back(sample.contribution.squaredNorm() / 3);
+    }
+    const double variance = (exact[0] - exact[1]).squaredNorm() / 3 / 2;  // per channel, as mean_squared_error
+    sum += variance, sum_squares += variance * variance;
+  }
+  noise.samples = 2 * kNoisePairs;
+  for (std::size_t t = 0; t < 4; ++t)
+    noise.own[t] /= static_cast<double>(noise.samples), noise.own_squares[t] /= static_cast<double>(noise.samples);
+  const double n = static_cast<double>(kNoisePairs);
+  noise.exact_variance = sum / n;
+  noise.exact_variance_error = std::sqrt(std::max(0.0, sum_squares / n - noise.exact_variance * noise.exact_variance) / n);
+  noise.mesh_blocked = mesh_scene.segments_blocked(noise.segments);
+  return noise;
+}
+
+// A proxy's part of the render's noise: per ray type, the mean over the camera samples of
+// the squared contributions of segments of that type, and the mean of their squares (for
+// the prediction's interval).
+json proxy_render_noise(const RenderNoise& noise, const RayScene& proxy_scene) {
+  const std::vector<std::uint8_t> proxy_blocked = proxy_scene.segments_blocked(noise.segments);
+  std::array<double, 4> weighted{}, weighted_squares{};
+  for (std::size_t i = 0; i < noise.segments.size(); ++i) {
+    const bool mesh = noise.mesh_blocked[i] != 0, proxy = proxy_blocked[i] != 0;
+    const std::size_t type = mesh ? (proxy ? 0 : 1) : (proxy ? 2 : 3);
+    weighted[type] += noise.squared[i];
+    weighted_squares[type] += noise.squared[i] * noise.squared[i];
+  }
+  const double n = static_cast<double>(noise.samples);
+  for (std::size_t t = 0; t < 4; ++t) weighted[t] /= n, weighted_squares[t] /= n;
+  return {{"squared_contribution_by_type", weighted}, {"squared_contribution_squares_by_type", weighted_squares}};
+}
+
 }  // namespace
 
 std::optional<std::array<double, 2>> cost_ratio_interval(const json& measure) {
@@ -248,6 +330,7 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   json rays;
   std::optional<Scene> scene;
   std::unique_ptr<RenderWorld> world;
+  std::vector<bool> mesh_instance;  // per scene instance: of the measured mesh
   const Sphere line_sphere = bounding_sphere(mesh);
   if (options.scene.empty()) {
     segments = isotropic_lines(line_sphere, options.rays, options.seed);
@@ -255,15 +338,15 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     placements.push_back(Eigen::Affine3d::Identity());
   } else {
     scene.emplace(load_scene(options.scene, options.on_warning));
-    std::vector<bool> exclude(scene->instances.size(), false);
+    mesh_instance.assign(scene->instances.size(), false);
     for (std::size_t i = 0; i < scene->instances.size(); ++i)
       if (scene->mesh(scene->instances[i].mesh).mesh == mesh) {
-        exclude[i] = true;
+        mesh_instance[i] = true;
         placements.push_back(scene->instances[i].transform);
       }
     if (placements.empty()) throw InvalidInputError(options.scene, "no instance of the scene uses the measured mesh");
     world = std::make_unique<RenderWorld>(*scene, std::vector<MeshProxies>(scene->instances.size()));
-    for (const ShadowSegment& s : scene_shadow_segments(*scene, *world, options.rays, options.seed, exclude))
+    for (const ShadowSegment& s : scene_shadow_segments(*scene, *world, options.rays, options.seed, mesh_instance))
       segments.push_back({s.from, s.to});
     if (segments.empty()) throw InvalidInputError(options.scene, "the camera sees no lit surface to measure from");
     rays = {{"kind", "scene shadow segments"},
@@ -296,6 +379,8 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   const Vertex center = placed_box.empty() ? Vertex::Zero() : Vertex(0.5 * (placed_box.min + placed_box.max));
   const RayScene mesh_scene(placed_mesh, center);
   const ReferenceRays reference = trace_reference(mesh_scene, std::move(segments), options.timing);
+  std::optional<RenderNoise> noise;
+  if (scene) noise = render_noise(*scene, *world, mesh_instance, mesh_scene, options.seed);
   const bool timed = options.timing.rays > 0 && options.timing.blocks > 0;
   const WorkPerRay mesh_work =
       timed ? count_work(CountingBvh(placed_mesh), false, reference.rays, options.timing.rays) : WorkPerRay{};
@@ -333,6 +418,7 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     }
     json measured = measurement_json(measurement);
     measured["cost_ns_per_ray"]["work"] = work_json(proxy_work.back());
+    if (noise) measured["render_noise"] = proxy_render_noise(*noise, proxy_scene);
     measured["rays"] = std::move(proxy_rays);
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     entry["measure"] = std::move(measured);
@@ -341,6 +427,15 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   if (timed && scene) {
     json share = render_share(*scene, *world, reference.mesh_ns_per_ray, options.seed);
     share["scene"] = options.scene.string();
+    share["noise"] = {{"description",
+                       "the exact render's variance of one camera sample within its pixel (per colour channel, as the "
+                       "mean squared error counts it), from pairs of samples in one pixel; each proxy's render_noise holds "
+                       "the squared contributions of the segments whose estimate a use changes, by ray type"},
+                      {"camera_samples", noise->samples},
+                      {"exact_variance_per_sample", noise->exact_variance},
+                      {"standard_error", noise->exact_variance_error},
+                      {"own_instances_squared_contribution_by_type", noise->own},
+                      {"own_instances_squared_contribution_squares_by_type", noise->own_squares}};
     manifest["render_share"] = std::move(share);
   } else {
     manifest.erase("render_share");

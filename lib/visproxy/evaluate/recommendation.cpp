@@ -94,11 +94,56 @@ std::string use_phrase(ProxyUse use) {
   return "?";
 }
 
+namespace {
+
+// The render's variance ratio with a use (render_variance_ratio) and its 95 % interval over
+// the sampling of the camera samples: the added noise's and the exact variance's standard
+// errors, combined to first order (their covariance left out).
+struct RenderNoiseRatio {
+  double ratio = 1, low = 1, high = 1;
+};
+
+RenderNoiseRatio render_noise_ratio(const json& noise, ProxyUse use, const UseSetting& setting, const Recommendation& r) {
+  std::array<double, 4> weighted{}, squares{};
+  const json& by_type = noise.at("squared_contribution_by_type");
+  const json& squares_by_type = noise.at("squared_contribution_squares_by_type");
+  for (std::size_t t = 0; t < 4; ++t)
+    weighted[t] = by_type.at(t).get<double>() + r.own_noise[t], squares[t] = squares_by_type.at(t).get<double>() + r.own_noise_squares[t];
+  const std::array<double, 4> added = added_variance_by_type(use, setting);
+  RenderNoiseRatio result;
+  result.ratio = render_variance_ratio(weighted, added, r.exact_variance);
+  if (!std::isfinite(result.ratio)) {
+    result.low = result.high = result.ratio;
+    return result;
+  }
+  double mean = 0, second = 0;  // of one sample's added variance
+  for (std::size_t t = 0; t < 4; ++t)
+    if (weighted[t] > 0) mean += weighted[t] * added[t], second += squares[t] * added[t] * added[t];
+  const double n = std::max(r.noise_samples, 1.0);
+  const double added_error = std::sqrt(std::max(0.0, second - mean * mean) / n);
+  const double v = r.exact_variance;
+  const double error = v > 0 ? std::hypot(added_error / v, mean * r.exact_variance_error / (v * v)) : 0.0;
+  result.low = std::max(1.0, result.ratio - 1.96 * error);
+  result.high = result.ratio + 1.96 * error;
+  return result;
+}
+
+}  // namespace
+
 Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_kind, std::size_t budget) {
   Recommendation r;
   if (const auto share = manifest.find("render_share"); share != manifest.end() && share->is_object()) {
     r.render_share = share->value("share", std::numeric_limits<double>::quiet_NaN());
     r.render_scene = share->value("scene", std::string());
+    if (const auto noise = share->find("noise"); noise != share->end() && noise->is_object()) {
+      r.exact_variance = noise->value("exact_variance_per_sample", std::numeric_limits<double>::quiet_NaN());
+      r.exact_variance_error = noise->value("standard_error", 0.0);
+      r.noise_samples = noise->value("camera_samples", 0.0);
+      for (std::size_t t = 0; t < 4; ++t) {
+        r.own_noise[t] = noise->at("own_instances_squared_contribution_by_type").at(t).get<double>();
+        r.own_noise_squares[t] = noise->at("own_instances_squared_contribution_squares_by_type").at(t).get<double>();
+      }
+    }
   }
   for (const json& entry : manifest.at("proxies")) {
     if (!entry.contains("measure") || !entry["measure"].is_object()) continue;
@@ -140,9 +185,22 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
           const double ratio = mesh_variance > 0 ? figures.prediction.variance / mesh_variance
                                : figures.prediction.variance > 0 ? std::numeric_limits<double>::infinity()
                                                                  : 1.0;
-          figures.render_efficiency = render_efficiency(figures.prediction.efficiency, ratio, r.render_share);
-          figures.render_interval = {render_efficiency(figures.interval.lower, ratio, r.render_share),
-                                     render_efficiency(figures.interval.upper, ratio, r.render_share)};
+          const auto noise = measured.find("render_noise");
+          if (std::isfinite(r.exact_variance) && noise != measured.end() && noise->is_object()) {
+            // The render's own noise: what the use adds to the segments it changes, over
+            // the exact render's variance (efficiency.h, render_variance_ratio).
+            const RenderNoiseRatio render = render_noise_ratio(*noise, kProxyUses[u], figures.prediction.setting, r);
+            const double cost_ratio = figures.prediction.ns_per_ray / costs.mesh_ns;
+            // The cost ratio at the ray interval's ends: efficiency = 1 / (ray variance ratio x cost ratio).
+            auto cost_at = [&](double efficiency) { return efficiency > 0 && ratio > 0 && std::isfinite(ratio) ? 1 / (efficiency * ratio) : cost_ratio; };
+            figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
+            figures.render_interval = {render_efficiency_of(cost_at(figures.interval.lower), render.high, r.render_share),
+                                       render_efficiency_of(cost_at(figures.interval.upper), render.low, r.render_share)};
+          } else {
+            figures.render_efficiency = render_efficiency(figures.prediction.efficiency, ratio, r.render_share);
+            figures.render_interval = {render_efficiency(figures.interval.lower, ratio, r.render_share),
+                                       render_efficiency(figures.interval.upper, ratio, r.render_share)};
+          }
         }
       }
     }

@@ -21,10 +21,13 @@ inline constexpr std::array<ProxyUse, 3> kProxyUses = {ProxyUse::control_variate
 struct UseFigures {
   UsePrediction prediction;  ///< at the use's most efficient setting (predict_use)
   Interval interval;         ///< 95 %, over the sampling of the measured rays
-  /// Over a render of the scene the proxies were measured in (render_efficiency with the
-  /// manifest's render_share); NaN when measured on isotropic lines or before the share was.
+  /// Over a render of the scene the proxies were measured in: the use's cost and the
+  /// render's noise with it (render_efficiency_of, from the manifest's render_share and the
+  /// proxy's render_noise; manifests measured before the noise was: render_efficiency, which
+  /// takes visibility for the render's only noise); NaN when measured on isotropic lines or
+  /// before the share was.
   double render_efficiency = std::numeric_limits<double>::quiet_NaN();
-  Interval render_interval;  ///< `interval`'s ends carried to the render the same way
+  Interval render_interval;  ///< `interval`'s ends carried to the render, with the noise ratio's own 95 % interval
 };
 
 struct ProxyEfficiency {
@@ -59,6 +62,14 @@ struct Recommendation {
   /// scene measured (manifest render_share); NaN when there is none.
   double render_share = std::numeric_limits<double>::quiet_NaN();
   std::string render_scene;
+  /// The exact render's variance of one camera sample within its pixel, its standard error
+  /// and the camera samples it was found on (manifest render_share.noise); NaN when there
+  /// is none (then the render prediction takes visibility for the render's only noise).
+  double exact_variance = std::numeric_limits<double>::quiet_NaN();
+  double exact_variance_error = 0;
+  double noise_samples = 0;
+  /// The same noise's segments from the mesh's own instances, by ray type (and squared).
+  std::array<double, 4> own_noise{}, own_noise_squares{};
   std::vector<ProxyEfficiency> proxies;  ///< every measured proxy, in manifest order
   std::array<UseChoice, 3> choices;      ///< in the order of kProxyUses
 };

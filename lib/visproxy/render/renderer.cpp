@@ -59,6 +59,44 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
   return segments;
 }
 
+std::vector<std::array<CameraSample, 2>> scene_sample_pairs(const Scene& scene, const RenderWorld& world, std::size_t pairs,
+                                                            std::uint64_t seed) {
+  const CameraRays camera(scene.camera);
+  const LightSampler lights(scene);
+  std::vector<std::array<CameraSample, 2>> samples(pairs);
+  PixelRandom random(seed, 0, 0);
+  const int width = scene.camera.width, height = scene.camera.height;
+  for (std::array<CameraSample, 2>& pair : samples) {
+    const int px = std::min(width - 1, static_cast<int>(random.uniform() * width));
+    const int py = std::min(height - 1, static_cast<int>(random.uniform() * height));
+    for (CameraSample& sample : pair) {
+      const double jx = random.uniform(), jy = random.uniform();
+      const std::optional<SurfaceHit> hit = world.intersect(camera.origin(), camera.direction(px + jx, py + jy));
+      if (!hit) continue;
+      if (hit->light >= 0) {
+        const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
+        if (hit->light_front || light.two_sided) sample.emitted = light.radiance;
+        continue;
+      }
+      if (lights.empty()) continue;
+      // As direct_light() draws it: one point on the lights by area.
+      const LightSample y = lights.sample(random);
+      const Vertex x = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
+      const Vertex to_light = y.position - x;
+      const double distance2 = to_light.squaredNorm(), distance = std::sqrt(distance2);
+      const double cos_x = hit->normal.dot(to_light) / distance;
+      double cos_y = -y.normal.dot(to_light) / distance;
+      if (y.two_sided) cos_y = std::abs(cos_y);
+      if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) continue;
+      const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
+      sample.contribution = brdf.cwiseProduct(y.radiance) * (cos_x * cos_y / distance2 * lights.total_area());
+      sample.has_segment = true;
+      sample.segment = {x, light_end(world, y, x), hit->instance};
+    }
+  }
+  return samples;
+}
+
 namespace {
 
 // ProbabilityMode::optimal: eq. 8's optimal probabilities for each form of the rest of the

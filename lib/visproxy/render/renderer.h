@@ -4,6 +4,7 @@
 // shadow segments a visibility strategy answers: exact, stochastic (eq. 8 or the control
 // variate, visibility splitting eq. 27), bounds, or occluder disks of sphere sets.
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -43,5 +44,21 @@ struct ShadowSegment {
 };
 std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const RenderWorld& world, std::size_t count,
                                                  std::uint64_t seed, const std::vector<bool>& exclude);
+
+/// One camera sample as a render with direct light and one shadow segment per sample takes
+/// it (visproxy render's defaults): what the camera ray met on a light, or the sample's
+/// segment with what the sample adds to its pixel when the segment is unoccluded.
+struct CameraSample {
+  Color emitted = Color::Zero();       ///< the camera ray met a light's emitting side
+  Color contribution = Color::Zero();  ///< brdf x radiance x cos x cos / distance^2 x light area
+  bool has_segment = false;
+  ShadowSegment segment;  ///< when has_segment
+};
+
+/// `pairs` pairs of camera samples, each pair from one pixel (uniform over the image) with
+/// its own jitter and light sample: the difference within a pair shows a render's noise
+/// per pixel, which differences between pixels would not. Deterministic for a seed.
+std::vector<std::array<CameraSample, 2>> scene_sample_pairs(const Scene& scene, const RenderWorld& world, std::size_t pairs,
+                                                            std::uint64_t seed);
 
 }  // namespace visproxy
