@@ -126,8 +126,9 @@ void add_measure_command(CLI::App& app, int& exit_code) {
       "and the GSSA ratio with 95 % intervals, the estimator's optimal probabilities and variance, and the cost per "
       "ray of proxy and mesh on one core, with a model of that cost fitted to the proxies' counted work (BVH nodes, "
       "triangles, balls) whose error widens the cost intervals. With --scene, the rays are the scene's shadow segments "
-      "instead, and the share of a render sample's time that shadow tests against the mesh take is measured, from "
-      "which 'report' predicts the gain over the whole render.");
+      "instead, and the share of a render sample's time that shadow tests against the mesh take is measured, with "
+      "the render's noise per pixel and each proxy's part in it, from which 'report' predicts the gain over the whole "
+      "render.");
   command->add_option("mesh", options->mesh, "The mesh the proxies were built from")->required();
   command
       ->add_option("dir", options->folder, "Proxy folder written by 'visproxy build' (a per-mesh folder: each mesh's)")
