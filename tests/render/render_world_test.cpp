@@ -681,14 +681,16 @@ Scene split_test_scene(const Vertex& shift, std::vector<MeshProxies>& proxies) {
 // Split scenes answer every segment as the own mesh and then the other instances'
 // stochastic or outside proxies would, one by one, on segments from points near and inside
 // the tori and below the floor (own mesh blocking, a proxy blocking, both, neither), near
-// the origin and 10^6 away from it; a clear segment costs one query instead of two. Beyond
+// the origin and 10^6 away from it, with ray masks and with the filter function alone; one
+// query answers each segment, where a clear one cost two one by one. Beyond
 // kSplitScenesUpTo instances, and in counting worlds, there are no split scenes and the
 // answers are the same.
 TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
   for (const Vertex& shift : {Vertex(0, 0, 0), Vertex(1e6, -1e6, 5e5)}) {
     std::vector<MeshProxies> proxies;
     const Scene scene = split_test_scene(shift, proxies);
-    const RenderWorld split(scene, proxies), plain(scene, proxies, {.split_scenes = false});
+    const RenderWorld split(scene, proxies), plain(scene, proxies, {.split_scenes = false}),
+        unmasked(scene, proxies, {.ray_masks = false});  // split scenes whose filter alone leaves out instances
     Random random(5);
     const auto uniform = [&](double low, double high) { return low + (high - low) * random.uniform(); };
     for (int own = 0; own < static_cast<int>(scene.instances.size()); ++own) {
@@ -712,9 +714,14 @@ TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
             std::uint64_t exact = 0, proxy = 0, plain_exact = 0, plain_proxy = 0;
             ASSERT_EQ(split.split_blocks(from, to, own, trace_own, exact, proxy, role, bits), expected) << own << " " << k;
             ASSERT_EQ(plain.split_blocks(from, to, own, trace_own, plain_exact, plain_proxy, role, bits), expected) << own << " " << k;
-            if (trace_own) ++seen[static_cast<std::size_t>(role)][static_cast<std::size_t>(expected)];
-            if (trace_own && expected == SplitAnswer::clear) {
+            std::uint64_t unused = 0;
+            ASSERT_EQ(unmasked.split_blocks(from, to, own, trace_own, unused, unused, role, bits), expected) << own << " " << k;
+            // The joint traversal answers alone, whatever blocks.
+            if (trace_own) {
               EXPECT_EQ(exact + proxy, 1u);
+            }
+            if (trace_own) ++seen[static_cast<std::size_t>(role)][static_cast<std::size_t>(expected)];
+              if (trace_own && expected == SplitAnswer::clear) {
               EXPECT_EQ(plain_exact + plain_proxy, 2u);
             }
           }

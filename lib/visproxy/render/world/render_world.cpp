@@ -84,6 +84,28 @@ void instance_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// A split scene's query (RenderWorld::split_blocks): a hit on the own mesh ends it, a hit on
+// another instance's proxy is noted and passed over, so that one traversal tells the own
+// mesh blocking from a proxy blocking.
+// Hits on instances outside `bits` (which ray masks leave out already, where the device has
+// them) are passed over unnoted.
+struct SplitContext {
+  RTCIntersectContext context;
+  unsigned own = 0;
+  unsigned bits = 0;
+  bool proxy_hit = false;
+};
+
+void split_filter(const RTCFilterFunctionNArguments* args) {
+  auto* context = reinterpret_cast<SplitContext*>(args->context);
+  for (unsigned lane = 0; lane < args->N; ++lane) {
+    const unsigned instance = RTCHitN_instID(args->hit, args->N, lane, 0);
+    if (args->valid[lane] == 0 || instance == context->own) continue;
+    if ((instance_mask(instance) & context->bits) != 0) context->proxy_hit = true;
+    args->valid[lane] = 0;
+  }
+}
+
 thread_local TraversalCounts g_thread_counts;
 
 // One instance of an object BVH for counted queries.
@@ -871,17 +893,25 @@ SplitAnswer RenderWorld::split_blocks(const Vertex& from, const Vertex& to, int 
   const InstanceFilter own_only{.skip = -1, .only = own}, rest{.skip = own, .only = -1, .bits = rest_bits};
   if (trace_own && has_split_scene(own)) {
     // One traversal of the own mesh and the others' traced proxies (the instance bits are
-    // unique here); their clipped proxies first.
+    // unique here): a hit on the own mesh ends it, the proxies' hits are only noted
+    // (split_filter). Their clipped proxies are tested apart.
     ++proxy_queries;
-    const bool clipped = w.any_convex(rest_scene, from, to, [&](const ConvexInstance& instance) {
-      return filter_passes(instance.id, rest) && instance.world.meets_segment(from, to);
-    });
     const auto index = static_cast<std::size_t>(own);
     RTCScene joint = proxies == SplitProxies::stochastic ? w.split_scenes[index] : w.split_outside_scenes[index];
-    if (!clipped && !w.blocked(joint, from, to, {.skip = -1, .only = -1, .bits = rest_bits | instance_mask(index)}))
-      return SplitAnswer::clear;
-    ++exact_queries;
-    return w.blocked(w.camera, from, to, own_only) ? SplitAnswer::own_blocks : SplitAnswer::proxy_blocks;
+    SplitContext context;
+    rtcInitIntersectContext(&context.context);
+    context.context.filter = split_filter;
+    context.own = static_cast<unsigned>(own);
+    context.bits = rest_bits;
+    RTCRay ray = segment_ray(from - w.origin, to - w.origin);
+    ray.mask = kAllInstances & (rest_bits | instance_mask(index));
+    rtcOccluded1(joint, &context.context, &ray);
+    if (ray.tfar == -std::numeric_limits<float>::infinity()) return SplitAnswer::own_blocks;
+    if (context.proxy_hit || w.any_convex(rest_scene, from, to, [&](const ConvexInstance& instance) {
+          return filter_passes(instance.id, rest) && instance.world.meets_segment(from, to);
+        }))
+      return SplitAnswer::proxy_blocks;
+    return SplitAnswer::clear;
   }
   if (trace_own) {
     ++exact_queries;
