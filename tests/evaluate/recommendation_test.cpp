@@ -284,5 +284,85 @@ TEST(Recommendation, JsonMatchesItsSchemaAndIsReproducible) {
   EXPECT_EQ(a["seed"], 7);
 }
 
+// Over the render, each use's figure comes from the render's own noise when the manifest
+// has it: bounds add no noise (Amdahl's law alone); a noisier exact render dilutes what eq.
+// 8 and the control variate add, so their figures rise, their intervals holding them; eq.
+// 8 takes the probabilities the renderer's optimal mode finds, with the mesh's own
+// segments where they share the proxy's form and apart where they do not; and a manifest
+// measured before the noise was recorded keeps the shadow ray's ratio.
+TEST(Recommendation, TheRenderFiguresComeFromTheRendersNoise) {
+  auto manifest_with = [](const std::string& kind, double exact_variance, double own_weight, bool noise) {
+    json box = entry("box", kind, {6000, 0, 300, 3700}, 30, 200);
+    box["measure"]["rays"]["kind"] = "scene shadow segments";
+    box["measure"]["rays"]["instances_of_mesh"] = 1;
+    box["measure"]["render_noise"] = {{"segments_by_type", {6000, 0, 300, 3700}},
+                                      {"squared_contribution_by_type", {0.05, 0.0, 0.04, 0.2}},
+                                      {"squared_contribution_squares_by_type", {0.01, 0.0, 0.01, 0.05}}};
+    json m = manifest_of({box});
+    m["render_share"] = {{"share", 0.3}, {"scene", "s.json"}};
+    if (noise)
+      m["render_share"]["noise"] = {{"camera_samples", 40000},
+                                    {"exact_variance_per_sample", exact_variance},
+                                    {"standard_error", 0.01 * exact_variance},
+                                    {"own_instances_squared_contribution_by_type", {0.02, 0.0, 0.0, own_weight}},
+                                    {"own_instances_squared_contribution_squares_by_type", {0.001, 0.0, 0.0, 0.05}},
+                                    {"own_instances_segments_by_type", {500, 0, 0, 3000}}};
+    return m;
+  };
+  auto figures = [](const json& m, ProxyUse use) { return recommend_proxies(m, as_claimed()).proxies.at(0).uses[index_of(use)]; };
+  const double s = 0.3;
+  const UseFigures bounds = figures(manifest_with("outside", 0.5, 0.3, true), ProxyUse::bounds);
+  EXPECT_NEAR(bounds.render_efficiency, 1 / ((1 - s) + s * bounds.prediction.ns_per_ray / 200), 1e-12);
+  for (const ProxyUse use : {ProxyUse::term_choice, ProxyUse::control_variate}) {
+    const UseFigures quiet = figures(manifest_with("outside", 0.5, 0.3, true), use);
+    const UseFigures noisy = figures(manifest_with("outside", 5.0, 0.3, true), use);
+    EXPECT_GT(quiet.render_efficiency, 0) << use_name(use);
+    EXPECT_LT(quiet.render_efficiency, noisy.render_efficiency) << use_name(use);
+    for (const UseFigures& f : {quiet, noisy}) {
+      EXPECT_LE(f.render_interval.lower, f.render_efficiency) << use_name(use);
+      EXPECT_GE(f.render_interval.upper, f.render_efficiency) << use_name(use);
+    }
+  }
+  // Eq. 8 over the render: the probabilities of the renderer's optimal mode, one set for the
+  // proxy's segments and the mesh's own when an outside proxy shares its form with the
+  // exact rest of the scene; then the own segments' noise counts with those probabilities.
+  {
+    const UseFigures f = figures(manifest_with("outside", 0.5, 0.3, true), ProxyUse::term_choice);
+    const Probabilities p = optimal_probabilities(ProxyKind::outside, RayTypeFractions::from(RayTypeCounts{{6500, 0, 300, 6700}}),
+                                                  {.floor = UseOptions{}.floor});
+    UseSetting setting;
+    setting.term = p;
+    const std::array<double, 4> g = added_variance_by_type(ProxyUse::term_choice, setting);
+    const double added = 0.05 * g[0] + 0.04 * g[2] + 0.2 * g[3] + 0.02 * g[0] + 0.3 * g[3];
+    const RayTypeFractions fractions = RayTypeFractions::from(RayTypeCounts{{6000, 0, 300, 3700}});
+    const double cost = predict_use_at(ProxyUse::term_choice, ProxyKind::outside, fractions, TraceCosts{30, 200}, setting).ns_per_ray / 200;
+    EXPECT_NEAR(f.render_efficiency, render_efficiency_of(cost, 1 + added / 0.5, s), 1e-9);
+  }
+  // A general proxy of a mesh placed once: the mesh's own segments see an exact rest of the
+  // scene, of the outside form, whose probabilities the renderer finds from them alone.
+  {
+    const UseFigures f = figures(manifest_with("general", 0.5, 0.3, true), ProxyUse::term_choice);
+    UseSetting others, own;
+    others.term = optimal_probabilities(ProxyKind::general, RayTypeFractions::from(RayTypeCounts{{6000, 0, 300, 3700}}),
+                                        {.floor = UseOptions{}.floor});
+    own.term = optimal_probabilities(ProxyKind::outside, RayTypeFractions::from(RayTypeCounts{{500, 0, 0, 3000}}),
+                                     {.floor = UseOptions{}.floor});
+    EXPECT_GT(own.term.p1, others.term.p1);
+    const std::array<double, 4> g = added_variance_by_type(ProxyUse::term_choice, others),
+                                own_g = added_variance_by_type(ProxyUse::term_choice, own);
+    const double added = 0.05 * g[0] + 0.04 * g[2] + 0.2 * g[3] + 0.02 * own_g[0] + 0.3 * own_g[3];
+    const RayTypeFractions fractions = RayTypeFractions::from(RayTypeCounts{{6000, 0, 300, 3700}});
+    const double cost = predict_use_at(ProxyUse::term_choice, ProxyKind::general, fractions, TraceCosts{30, 200}, others).ns_per_ray / 200;
+    EXPECT_NEAR(f.render_efficiency, render_efficiency_of(cost, 1 + added / 0.5, s), 1e-9);
+  }
+  // More weight on the mesh's own segments, more of eq. 8's noise.
+  EXPECT_GT(figures(manifest_with("outside", 0.5, 0.3, true), ProxyUse::term_choice).render_efficiency,
+            figures(manifest_with("outside", 0.5, 3.0, true), ProxyUse::term_choice).render_efficiency);
+  // Without the noise: the shadow ray's ratio, as before.
+  const UseFigures old = figures(manifest_with("outside", 0.5, 0.3, false), ProxyUse::term_choice);
+  const RayTypeFractions fractions = RayTypeFractions::from(RayTypeCounts{{6000, 0, 300, 3700}});
+  const double ratio = old.prediction.variance / (fractions.v_avg() * (1 - fractions.v_avg()));
+  EXPECT_NEAR(old.render_efficiency, render_efficiency(old.prediction.efficiency, ratio, s), 1e-12);
+}
 }  // namespace
 }  // namespace visproxy

@@ -214,6 +214,7 @@ struct RenderNoise {
   // From the mesh's instances: per ray type, the mean over samples of the squared
   // contribution, and of its square.
   std::array<double, 4> own{}, own_squares{};
+  std::array<std::uint64_t, 4> own_segments{};  // how many, by type
 };
 
 constexpr std::size_t kNoisePairs = 20000;
@@ -241,6 +242,7 @@ RenderNoise render_noise(const Scene& scene, const RenderWorld& world, const std
         const std::size_t type = world.mesh_blocks(s.from, s.to, {.skip = s.instance, .only = -1}) ? 0 : 3;
         const double squared = sample.contribution.squaredNorm() / 3;
         noise.own[type] += squared, noise.own_squares[type] += squared * squared;
+        ++noise.own_segments[type];
         continue;
       }
       if (rest_world && rest_world->mesh_blocks(s.from, s.to)) continue;
@@ -266,15 +268,19 @@ RenderNoise render_noise(const Scene& scene, const RenderWorld& world, const std
 json proxy_render_noise(const RenderNoise& noise, const RayScene& proxy_scene) {
   const std::vector<std::uint8_t> proxy_blocked = proxy_scene.segments_blocked(noise.segments);
   std::array<double, 4> weighted{}, weighted_squares{};
+  std::array<std::uint64_t, 4> segments{};
   for (std::size_t i = 0; i < noise.segments.size(); ++i) {
     const bool mesh = noise.mesh_blocked[i] != 0, proxy = proxy_blocked[i] != 0;
     const std::size_t type = mesh ? (proxy ? 0 : 1) : (proxy ? 2 : 3);
+    ++segments[type];
     weighted[type] += noise.squared[i];
     weighted_squares[type] += noise.squared[i] * noise.squared[i];
   }
   const double n = static_cast<double>(noise.samples);
   for (std::size_t t = 0; t < 4; ++t) weighted[t] /= n, weighted_squares[t] /= n;
-  return {{"squared_contribution_by_type", weighted}, {"squared_contribution_squares_by_type", weighted_squares}};
+  return {{"segments_by_type", segments},
+          {"squared_contribution_by_type", weighted},
+          {"squared_contribution_squares_by_type", weighted_squares}};
 }
 
 }  // namespace
@@ -435,7 +441,8 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
                       {"exact_variance_per_sample", noise->exact_variance},
                       {"standard_error", noise->exact_variance_error},
                       {"own_instances_squared_contribution_by_type", noise->own},
-                      {"own_instances_squared_contribution_squares_by_type", noise->own_squares}};
+                      {"own_instances_squared_contribution_squares_by_type", noise->own_squares},
+                      {"own_instances_segments_by_type", noise->own_segments}};
     manifest["render_share"] = std::move(share);
   } else {
     manifest.erase("render_share");

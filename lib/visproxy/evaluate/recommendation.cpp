@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "visproxy/evaluate/measure_proxies.h"
 
@@ -103,29 +105,59 @@ struct RenderNoiseRatio {
   double ratio = 1, low = 1, high = 1;
 };
 
-RenderNoiseRatio render_noise_ratio(const json& noise, ProxyUse use, const UseSetting& setting, const Recommendation& r) {
-  std::array<double, 4> weighted{}, squares{};
+RenderNoiseRatio render_noise_ratio(const json& noise, ProxyUse use, const UseSetting& setting, const UseSetting& own_setting,
+                                    const Recommendation& r) {
   const json& by_type = noise.at("squared_contribution_by_type");
   const json& squares_by_type = noise.at("squared_contribution_squares_by_type");
-  for (std::size_t t = 0; t < 4; ++t)
-    weighted[t] = by_type.at(t).get<double>() + r.own_noise[t], squares[t] = squares_by_type.at(t).get<double>() + r.own_noise_squares[t];
-  const std::array<double, 4> added = added_variance_by_type(use, setting);
+  const std::array<double, 4> added = added_variance_by_type(use, setting), own_added = added_variance_by_type(use, own_setting);
+  double mean = 0, second = 0;  // of one camera sample's added variance
+  bool unbounded = false;
+  auto add = [&](double weighted, double squares, double g) {
+    if (!(weighted > 0)) return;
+    if (std::isinf(g)) unbounded = true;
+    mean += weighted * g, second += squares * g * g;
+  };
+  for (std::size_t t = 0; t < 4; ++t) {
+    add(by_type.at(t).get<double>(), squares_by_type.at(t).get<double>(), added[t]);
+    add(r.own_noise[t], r.own_noise_squares[t], own_added[t]);
+  }
   RenderNoiseRatio result;
-  result.ratio = render_variance_ratio(weighted, added, r.exact_variance);
-  if (!std::isfinite(result.ratio)) {
-    result.low = result.high = result.ratio;
+  const double v = r.exact_variance;
+  if (unbounded || (mean > 0 && !(v > 0))) {
+    result.ratio = result.low = result.high = std::numeric_limits<double>::infinity();
     return result;
   }
-  double mean = 0, second = 0;  // of one sample's added variance
-  for (std::size_t t = 0; t < 4; ++t)
-    if (weighted[t] > 0) mean += weighted[t] * added[t], second += squares[t] * added[t] * added[t];
+  if (!(mean > 0)) return result;
+  result.ratio = 1 + mean / v;
   const double n = std::max(r.noise_samples, 1.0);
   const double added_error = std::sqrt(std::max(0.0, second - mean * mean) / n);
-  const double v = r.exact_variance;
-  const double error = v > 0 ? std::hypot(added_error / v, mean * r.exact_variance_error / (v * v)) : 0.0;
+  const double error = std::hypot(added_error / v, mean * r.exact_variance_error / (v * v));
   result.low = std::max(1.0, result.ratio - 1.96 * error);
   result.high = result.ratio + 1.96 * error;
   return result;
+}
+
+// The probabilities `render --probabilities optimal` gives eq. 8: eq. 16's optimum over the
+// render's own segments, one set per form of the rest of the scene. The segments from the
+// mesh's instances share the proxy's set when their rest of the scene has the proxy's form
+// (other instances of the mesh, or an outside proxy, whose form an exact rest shares);
+// otherwise theirs is the optimum of their own segments (which agree: p1 = 1).
+std::pair<Probabilities, Probabilities> render_optimal_probabilities(const json& noise, ProxyKind kind, std::size_t mesh_instances,
+                                                                     const Recommendation& r) {
+  RayTypeCounts others, own;
+  for (std::size_t t = 0; t < 4; ++t) {
+    others.counts[t] = noise.at("segments_by_type").at(t).get<std::uint64_t>();
+    own.counts[t] = r.own_segments[t];
+  }
+  const OptimalProbabilityOptions options{.floor = UseOptions{}.floor};
+  if (mesh_instances > 1 || kind == ProxyKind::outside) {
+    RayTypeCounts mixed = others;
+    for (std::size_t t = 0; t < 4; ++t) mixed.counts[t] += own.counts[t];
+    const Probabilities p = optimal_probabilities(kind, RayTypeFractions::from(mixed), options);
+    return {p, p};
+  }
+  return {optimal_probabilities(kind, RayTypeFractions::from(others), options),
+          optimal_probabilities(ProxyKind::outside, RayTypeFractions::from(own), options)};
 }
 
 }  // namespace
@@ -142,6 +174,9 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
       for (std::size_t t = 0; t < 4; ++t) {
         r.own_noise[t] = noise->at("own_instances_squared_contribution_by_type").at(t).get<double>();
         r.own_noise_squares[t] = noise->at("own_instances_squared_contribution_squares_by_type").at(t).get<double>();
+        r.own_segments[t] = noise->contains("own_instances_segments_by_type")
+                                ? noise->at("own_instances_segments_by_type").at(t).get<std::uint64_t>()
+                                : 0;
       }
     }
   }
@@ -189,10 +224,22 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
           if (std::isfinite(r.exact_variance) && noise != measured.end() && noise->is_object()) {
             // The render's own noise: what the use adds to the segments it changes, over
             // the exact render's variance (efficiency.h, render_variance_ratio).
-            const RenderNoiseRatio render = render_noise_ratio(*noise, kProxyUses[u], figures.prediction.setting, r);
-            const double cost_ratio = figures.prediction.ns_per_ray / costs.mesh_ns;
-            // The cost ratio at the ray interval's ends: efficiency = 1 / (ray variance ratio x cost ratio).
-            auto cost_at = [&](double efficiency) { return efficiency > 0 && ratio > 0 && std::isfinite(ratio) ? 1 / (efficiency * ratio) : cost_ratio; };
+            UseSetting setting = figures.prediction.setting, own_setting = setting;
+            const double ray_cost_ratio = figures.prediction.ns_per_ray / costs.mesh_ns;
+            double cost_ratio = ray_cost_ratio;
+            if (kProxyUses[u] == ProxyUse::term_choice && noise->contains("segments_by_type")) {
+              // Over the render, eq. 8 at the probabilities the renderer's optimal mode finds.
+              const std::size_t instances = measured.contains("rays") ? measured["rays"].value("instances_of_mesh", std::size_t{1}) : 1;
+              std::tie(setting.term, own_setting.term) = render_optimal_probabilities(*noise, p.proved, instances, r);
+              cost_ratio = predict_use_at(ProxyUse::term_choice, p.proved, fractions, costs, setting).ns_per_ray / costs.mesh_ns;
+            }
+            const RenderNoiseRatio render = render_noise_ratio(*noise, kProxyUses[u], setting, own_setting, r);
+            // The cost ratio at the ray interval's ends (efficiency = 1 / (ray variance ratio x
+            // cost ratio)), scaled as the render's setting scales the prediction's cost.
+            auto cost_at = [&](double efficiency) {
+              const double at_end = efficiency > 0 && ratio > 0 && std::isfinite(ratio) ? 1 / (efficiency * ratio) : ray_cost_ratio;
+              return ray_cost_ratio > 0 ? at_end * cost_ratio / ray_cost_ratio : cost_ratio;
+            };
             figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
             figures.render_interval = {render_efficiency_of(cost_at(figures.interval.lower), render.high, r.render_share),
                                        render_efficiency_of(cost_at(figures.interval.upper), render.low, r.render_share)};

@@ -25,7 +25,9 @@ struct UseFigures {
   /// render's noise with it (render_efficiency_of, from the manifest's render_share and the
   /// proxy's render_noise; manifests measured before the noise was: render_efficiency, which
   /// takes visibility for the render's only noise); NaN when measured on isotropic lines or
-  /// before the share was.
+  /// before the share was. Eq. 8 is taken at the probabilities `render --probabilities
+  /// optimal` finds (eq. 16's optimum over the render's segments), the other uses at
+  /// `prediction`'s setting.
   double render_efficiency = std::numeric_limits<double>::quiet_NaN();
   Interval render_interval;  ///< `interval`'s ends carried to the render, with the noise ratio's own 95 % interval
 };
@@ -70,6 +72,7 @@ struct Recommendation {
   double noise_samples = 0;
   /// The same noise's segments from the mesh's own instances, by ray type (and squared).
   std::array<double, 4> own_noise{}, own_noise_squares{};
+  std::array<std::uint64_t, 4> own_segments{};  ///< how many of those segments, by type
   std::vector<ProxyEfficiency> proxies;  ///< every measured proxy, in manifest order
   std::array<UseChoice, 3> choices;      ///< in the order of kProxyUses
 };
