@@ -83,9 +83,9 @@ def main():
     parser.add_argument("--repetitions", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=4.0, help="time per mode of each compare run")
     parser.add_argument("--rays", type=int, default=200000, help="shadow segments of each measure run")
-    # The reference's own noise adds to every mode's MSE and pulls the measured ratios towards
-    # 1: a 4-second render of these scenes takes about 1000 spp, as noisy as a 1024-spp
-    # reference. At 16 384 spp the reference adds about 6 % to exact's MSE.
+    # The reference's own noise adds to every mode's MSE: compare subtracts it, and a
+    # reference far less noisy than a 4-second render (about 1000 spp here) keeps that
+    # correction small.
     parser.add_argument("--reference-spp", type=int, default=16384)
     parser.add_argument("--work", default="")
     parser.add_argument("scenes", nargs="*")
@@ -132,6 +132,8 @@ def main():
             command += ["--reference", reference] if os.path.exists(reference) else ["--reference-spp", str(args.reference_spp)]
             run(command, log)
             if not os.path.exists(reference):
+                # With its noise (reference.json), which compare subtracts from every MSE.
+                os.replace(os.path.join(out, "reference.json"), os.path.splitext(reference)[0] + ".json")
                 os.replace(os.path.join(out, "reference.pfm"), reference)
             with open(os.path.join(out, "table.csv")) as table:
                 modes = {row["mode"]: row for row in csv.DictReader(table)}

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "visproxy/core/errors.h"
 #include "visproxy/core/files.h"
+#include "visproxy/core/json_input.h"
 #include "visproxy/evaluate/plot.h"
 #include "visproxy/render/scene_proxies.h"
 #include "visproxy/render/renderer.h"
@@ -175,8 +177,20 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     if (o->height > 0) scene.camera.height = o->height;
     const std::filesystem::path folder = o->folder.empty() ? std::filesystem::path("compare-" + o->scene.stem().string()) : o->folder;
     Image reference;
+    // The reference's own noise: its variance per pixel and channel, which adds to every
+    // mode's MSE against it (the two are independent). Known when compare rendered it (from
+    // its two halves) or when a reference it wrote is given back with its REF.json.
+    std::optional<double> reference_noise;
     if (!o->reference.empty()) {
       reference = read_linear_image(o->reference);
+      const std::filesystem::path noise_path = std::filesystem::path(o->reference).replace_extension(".json");
+      if (std::filesystem::exists(noise_path)) {
+        const JsonInput input(noise_path);
+        const nlohmann::json noise = input.parse(read_file(noise_path));
+        const double value = input.number(input.member(input.object(noise, ""), "noise_per_pixel", ""), "noise_per_pixel");
+        if (value < 0) input.fail("noise_per_pixel", "must not be negative");
+        reference_noise = value;
+      }
       if (reference.width != scene.camera.width || reference.height != scene.camera.height)
         throw InvalidInputError(o->reference, "is " + std::to_string(reference.width) + "x" + std::to_string(reference.height) +
                                                   "; the scene renders " + std::to_string(scene.camera.width) + "x" +
@@ -233,16 +247,37 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       const std::string label = "exact reference, " + std::to_string(o->reference_spp) + " spp";
       if (terminal) r.on_pass = [&](int passes, double seconds) { draw_progress(label, double(passes) / r.spp, passes, seconds); };
       else std::cerr << "visproxy compare: rendering the " << label << "\n";
-      const RenderResult result = render(scene, *world, r);
+      // In two halves of independent samples: their difference shows the reference's noise.
+      const int first_half = std::max(1, o->reference_spp / 2), second_half = std::max(1, o->reference_spp - first_half);
+      r.spp = first_half;
+      const RenderResult a = render(scene, *world, r);
+      r.spp = second_half;
+      r.seed = o->seed + 2000003;
+      const RenderResult b = render(scene, *world, r);
       if (terminal) std::fprintf(stderr, "\n");
-      reference = result.image;
+      const double total = first_half + second_half;
+      reference = Image(a.image.width, a.image.height);
+      for (std::size_t i = 0; i < reference.pixels.size(); ++i)
+        reference.pixels[i] = (first_half * a.image.pixels[i] + second_half * b.image.pixels[i]) / total;
+      // Var(half) = per-sample variance / half's spp; E[MSE(a, b)] = Var(a) + Var(b), and
+      // the reference's variance is per-sample variance / total spp.
+      const double per_sample = mean_squared_error(a.image, b.image) / (1.0 / first_half + 1.0 / second_half);
+      reference_noise = o->reference_spp > 1 ? per_sample / total : 0.0;
       write_pfm(folder / "reference.pfm", reference);
       write_png(folder / "reference.png", reference);
+      write_file_atomically(folder / "reference.json",
+                            nlohmann::json{{"description", "the reference's noise: its variance per pixel and channel, from the "
+                                                           "difference of its two halves; compare subtracts it from every MSE"},
+                                           {"spp", o->reference_spp},
+                                           {"noise_per_pixel", *reference_noise}}
+                                    .dump(2) + "\n");
       reference_note = "reference rendered exactly with " + std::to_string(o->reference_spp) + " spp x " +
-                       std::to_string(o->shadow_rays) + " shadow rays (seed " + std::to_string(o->seed + 1000003) + ", " +
-                       format_number(result.stats.seconds) + " s)";
+                       std::to_string(o->shadow_rays) + " shadow rays (seeds " + std::to_string(o->seed + 1000003) + " and " +
+                       std::to_string(o->seed + 2000003) + ", " + format_number(a.stats.seconds + b.stats.seconds) + " s)";
     }
 
+    reference_note += reference_noise ? "; its own noise, " + format_number(*reference_noise) + " per pixel, is subtracted from every MSE"
+                                      : "; its own noise is not known (no REF.json beside it) and is left in every MSE";
     const double pixels = static_cast<double>(scene.camera.width) * scene.camera.height;
     std::string md = "# visproxy compare: " + o->scene.string() + "\n\n" + std::to_string(scene.camera.width) + "x" +
                      std::to_string(scene.camera.height) + " pixels, " + std::to_string(o->shadow_rays) +
@@ -282,7 +317,13 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
         write_png(folder / (file_stem(mode.name) + ".png"), result.image);
         write_error_png(folder / (file_stem(mode.name) + ".error.png"), result.image, reference, error_white);
-        const double efficiency = mse > 0 ? 1.0 / (mse * s.seconds) : 0.0;
+        // The mode's own error: the MSE less the reference's noise. When that noise is most
+        // of the MSE, the reference cannot measure the mode, and efficiency is not given.
+        const double own_mse = mse - reference_noise.value_or(0.0);
+        if (reference_noise && own_mse < mse / 4)
+          std::cerr << "visproxy compare: warning: the reference's noise is " << format_number(*reference_noise / mse * 100)
+                    << " % of " << mode.name << "'s MSE: render the reference with more --reference-spp\n";
+        const double efficiency = own_mse > 0 && own_mse >= mse / 4 ? 1.0 / (own_mse * s.seconds) : std::nan("");
         if (m == 0) exact_efficiency = efficiency;
         // The first passes again through the counting traversal: deterministic work figures,
         // scaled to the passes reached (every pass draws the same distribution of samples).
@@ -317,7 +358,8 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       }
       curves.push_back(std::move(curve));
     }
-    md += "\nMSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance). "
+    md += "\nMSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance); "
+          "efficiency takes the MSE less the reference's own noise (the two add), where it is known. "
           "Exact and proxy tests: segment queries against meshes and against proxies (adaptive modes include their probe "
           "rays). Traversal steps and primitive tests: BVH nodes visited and triangles or balls tested by the shadow "
           "queries, counted by re-rendering the first " + std::to_string(o->count_passes) +

@@ -294,7 +294,7 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
   ASSERT_EQ(generated.exit_code, 0) << generated.err;
   const std::filesystem::path out = folder_ / "compare";
   const auto result = testing::run_visproxy("compare '" + (folder_ / "hairball" / "hairball.json").string() + "' -o '" + out.string() +
-                                            "' --seconds 0.05 --reference-spp 8 --convergence-points 2 --count-passes 1 "
+                                            "' --seconds 0.05 --reference-spp 256 --convergence-points 2 --count-passes 1 "
                                             "--width 16 --height 12 --proxy hull:32 --cache '" + (folder_ / "cache").string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::string table = read_file(out / "table.md");
@@ -314,6 +314,49 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
   const std::size_t exact_row = csv.find("\"exact\"");
   const std::string row = csv.substr(exact_row, csv.find('\n', exact_row) - exact_row);
   EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
+}
+
+// The reference's own noise adds to every mode's MSE against it; compare estimates it from
+// the reference's two halves and subtracts it. The estimate is checked against a second,
+// independent reference (their MSE is the sum of their noises), given back with its
+// REF.json it is used again, without one it is said to be unknown, and a REF.json edited
+// to a negative noise is refused in one line naming it.
+TEST_F(CliRender, CompareSubtractsTheReferencesOwnNoise) {
+  const auto generated = testing::run_visproxy("generate hairball --triangles 2400 -o '" + (folder_ / "hairball").string() + "'");
+  ASSERT_EQ(generated.exit_code, 0) << generated.err;
+  const std::string scene = (folder_ / "hairball" / "hairball.json").string();
+  auto compare = [&](const std::string& out, const std::string& extra) {
+    return testing::run_visproxy("compare '" + scene + "' -o '" + (folder_ / out).string() +
+                                 "' --seconds 0.02 --convergence-points 1 --no-count --width 24 --height 18 --proxy hull:32 --cache '" +
+                                 (folder_ / "cache").string() + "' " + extra);
+  };
+  for (const char* out : {"first", "second"}) {
+    const auto result = compare(out, std::string("--reference-spp 32 --seed ") + (out[0] == 'f' ? "1" : "2"));
+    ASSERT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(read_file(folder_ / out / "table.md").find("is subtracted from every MSE"), std::string::npos);
+  }
+  auto noise = [&](const char* out) {
+    return nlohmann::json::parse(read_file(folder_ / out / "reference.json")).at("noise_per_pixel").get<double>();
+  };
+  const double first = noise("first"), second = noise("second");
+  EXPECT_GT(first, 0);
+  const double between = mean_squared_error(read_linear_image(folder_ / "first" / "reference.pfm"),
+                                            read_linear_image(folder_ / "second" / "reference.pfm"));
+  EXPECT_NEAR(between / (first + second), 1.0, 0.3) << between << " against " << first << " + " << second;
+  // Given back with its REF.json, and without.
+  std::filesystem::copy_file(folder_ / "first" / "reference.pfm", folder_ / "bare.pfm");
+  const auto with_noise = compare("again", "--reference '" + (folder_ / "first" / "reference.pfm").string() + "'");
+  ASSERT_EQ(with_noise.exit_code, 0) << with_noise.err;
+  EXPECT_NE(read_file(folder_ / "again" / "table.md").find("is subtracted from every MSE"), std::string::npos);
+  const auto bare = compare("bare", "--reference '" + (folder_ / "bare.pfm").string() + "'");
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  EXPECT_NE(read_file(folder_ / "bare" / "table.md").find("is not known"), std::string::npos);
+  std::ofstream(folder_ / "bare.json") << "{\"noise_per_pixel\": -1}";
+  const auto edited = compare("edited", "--reference '" + (folder_ / "bare.pfm").string() + "'");
+  EXPECT_EQ(edited.exit_code, 2);
+  EXPECT_EQ(edited.err.find('\n'), edited.err.size() - 1) << edited.err;
+  EXPECT_NE(edited.err.find("bare.json"), std::string::npos) << edited.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "edited" / "table.md"));
 }
 
 TEST_F(CliRender, BadScenesGetOneLineNamingTheFile) {
