@@ -132,8 +132,8 @@ def main():
             command += ["--reference", reference] if os.path.exists(reference) else ["--reference-spp", str(args.reference_spp)]
             run(command, log)
             if not os.path.exists(reference):
-                # With its noise (reference.json), which compare subtracts from every MSE.
-                os.replace(os.path.join(out, "reference.json"), os.path.splitext(reference)[0] + ".json")
+                # With its noise (reference.noise.json), which compare subtracts from every MSE.
+                os.replace(os.path.join(out, "reference.noise.json"), os.path.splitext(reference)[0] + ".noise.json")
                 os.replace(os.path.join(out, "reference.pfm"), reference)
             with open(os.path.join(out, "table.csv")) as table:
                 modes = {row["mode"]: row for row in csv.DictReader(table)}

@@ -148,7 +148,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   command->add_option("--reference-spp", o->reference_spp, "Samples per pixel of the rendered reference [default: 4096]")
       ->check(CLI::Range(1, 1 << 20));
   command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample in every mode [default: 1]")->check(CLI::Range(1, 4096));
-  command->add_option("--seed", o->seed, "Seed of the renders (the reference uses seed + 1000003) [default: 1]");
+  command->add_option("--seed", o->seed, "Seed of the renders (the reference's two halves use seed + 1000003 and seed + 2000003) [default: 1]");
   command->add_option("--convergence-points", o->convergence_points,
                       "Time budgets per mode for the MSE-against-time curve, halving from --seconds [default: 4]")
       ->check(CLI::Range(1, 12));
@@ -179,11 +179,11 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     Image reference;
     // The reference's own noise: its variance per pixel and channel, which adds to every
     // mode's MSE against it (the two are independent). Known when compare rendered it (from
-    // its two halves) or when a reference it wrote is given back with its REF.json.
+    // its two halves) or when a reference it wrote is given back with its REF.noise.json.
     std::optional<double> reference_noise;
     if (!o->reference.empty()) {
       reference = read_linear_image(o->reference);
-      const std::filesystem::path noise_path = std::filesystem::path(o->reference).replace_extension(".json");
+      const std::filesystem::path noise_path = std::filesystem::path(o->reference).replace_extension(".noise.json");
       if (std::filesystem::exists(noise_path)) {
         const JsonInput input(noise_path);
         const nlohmann::json noise = input.parse(read_file(noise_path));
@@ -247,37 +247,44 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       const std::string label = "exact reference, " + std::to_string(o->reference_spp) + " spp";
       if (terminal) r.on_pass = [&](int passes, double seconds) { draw_progress(label, double(passes) / r.spp, passes, seconds); };
       else std::cerr << "visproxy compare: rendering the " << label << "\n";
-      // In two halves of independent samples: their difference shows the reference's noise.
-      const int first_half = std::max(1, o->reference_spp / 2), second_half = std::max(1, o->reference_spp - first_half);
+      // In two halves of independent samples: their difference shows the reference's noise
+      // (a reference of 1 spp has no halves, and its noise stays unknown).
+      const int first_half = o->reference_spp > 1 ? o->reference_spp / 2 : 1, second_half = o->reference_spp - first_half;
       r.spp = first_half;
       const RenderResult a = render(scene, *world, r);
-      r.spp = second_half;
-      r.seed = o->seed + 2000003;
-      const RenderResult b = render(scene, *world, r);
+      std::optional<RenderResult> b;
+      if (second_half > 0) {
+        r.spp = second_half;
+        r.seed = o->seed + 2000003;
+        b = render(scene, *world, r);
+      }
       if (terminal) std::fprintf(stderr, "\n");
-      const double total = first_half + second_half;
-      reference = Image(a.image.width, a.image.height);
-      for (std::size_t i = 0; i < reference.pixels.size(); ++i)
-        reference.pixels[i] = (first_half * a.image.pixels[i] + second_half * b.image.pixels[i]) / total;
-      // Var(half) = per-sample variance / half's spp; E[MSE(a, b)] = Var(a) + Var(b), and
-      // the reference's variance is per-sample variance / total spp.
-      const double per_sample = mean_squared_error(a.image, b.image) / (1.0 / first_half + 1.0 / second_half);
-      reference_noise = o->reference_spp > 1 ? per_sample / total : 0.0;
+      const double total = o->reference_spp;
+      reference = a.image;
+      if (b) {
+        for (std::size_t i = 0; i < reference.pixels.size(); ++i)
+          reference.pixels[i] = (first_half * a.image.pixels[i] + second_half * b->image.pixels[i]) / total;
+        // Var(half) = per-sample variance / half's spp; E[MSE(a, b)] = Var(a) + Var(b), and
+        // the reference's variance is per-sample variance / total spp.
+        reference_noise = mean_squared_error(a.image, b->image) / (1.0 / first_half + 1.0 / second_half) / total;
+      }
       write_pfm(folder / "reference.pfm", reference);
       write_png(folder / "reference.png", reference);
-      write_file_atomically(folder / "reference.json",
+      if (reference_noise)
+        write_file_atomically(folder / "reference.noise.json",
                             nlohmann::json{{"description", "the reference's noise: its variance per pixel and channel, from the "
                                                            "difference of its two halves; compare subtracts it from every MSE"},
                                            {"spp", o->reference_spp},
                                            {"noise_per_pixel", *reference_noise}}
                                     .dump(2) + "\n");
       reference_note = "reference rendered exactly with " + std::to_string(o->reference_spp) + " spp x " +
-                       std::to_string(o->shadow_rays) + " shadow rays (seeds " + std::to_string(o->seed + 1000003) + " and " +
-                       std::to_string(o->seed + 2000003) + ", " + format_number(a.stats.seconds + b.stats.seconds) + " s)";
+                       std::to_string(o->shadow_rays) + " shadow rays (seeds " + std::to_string(o->seed + 1000003) +
+                       (b ? " and " + std::to_string(o->seed + 2000003) : std::string()) + ", " +
+                       format_number(a.stats.seconds + (b ? b->stats.seconds : 0.0)) + " s)";
     }
 
     reference_note += reference_noise ? "; its own noise, " + format_number(*reference_noise) + " per pixel, is subtracted from every MSE"
-                                      : "; its own noise is not known (no REF.json beside it) and is left in every MSE";
+                                      : "; its own noise is not known (no REF.noise.json beside it, or 1 spp) and is left in every MSE";
     const double pixels = static_cast<double>(scene.camera.width) * scene.camera.height;
     std::string md = "# visproxy compare: " + o->scene.string() + "\n\n" + std::to_string(scene.camera.width) + "x" +
                      std::to_string(scene.camera.height) + " pixels, " + std::to_string(o->shadow_rays) +
@@ -362,7 +369,8 @@ void add_compare_command(CLI::App& app, int& exit_code) {
           "efficiency takes the MSE less the reference's own noise (the two add), where it is known. "
           "Exact and proxy tests: segment queries against meshes and against proxies (adaptive modes include their probe "
           "rays). Traversal steps and primitive tests: BVH nodes visited and triangles or balls tested by the shadow "
-          "queries, counted by re-rendering the first " + std::to_string(o->count_passes) +
+          "queries (one by one: a split segment's own mesh and the rest's proxies as two queries, where the timed "
+          "render joins them in one), counted by re-rendering the first " + std::to_string(o->count_passes) +
           " passes with visproxy's own traversal and scaled to the passes reached (learned modes: every pass; nan with "
           "--no-count). eq8: the "
           "paper's estimator (a term drawn with p1, p2, p3); control variate: the proxy's answer corrected by the mesh "

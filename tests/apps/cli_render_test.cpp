@@ -319,8 +319,9 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
 // The reference's own noise adds to every mode's MSE against it; compare estimates it from
 // the reference's two halves and subtracts it. The estimate is checked against a second,
 // independent reference (their MSE is the sum of their noises), given back with its
-// REF.json it is used again, without one it is said to be unknown, and a REF.json edited
-// to a negative noise is refused in one line naming it.
+// REF.noise.json it is used again, without one it is said to be unknown (a scene file
+// beside a reference of the same name is not taken for it), and a REF.noise.json edited to
+// a negative noise is refused in one line naming it.
 TEST_F(CliRender, CompareSubtractsTheReferencesOwnNoise) {
   const auto generated = testing::run_visproxy("generate hairball --triangles 2400 -o '" + (folder_ / "hairball").string() + "'");
   ASSERT_EQ(generated.exit_code, 0) << generated.err;
@@ -336,7 +337,7 @@ TEST_F(CliRender, CompareSubtractsTheReferencesOwnNoise) {
     EXPECT_NE(read_file(folder_ / out / "table.md").find("is subtracted from every MSE"), std::string::npos);
   }
   auto noise = [&](const char* out) {
-    return nlohmann::json::parse(read_file(folder_ / out / "reference.json")).at("noise_per_pixel").get<double>();
+    return nlohmann::json::parse(read_file(folder_ / out / "reference.noise.json")).at("noise_per_pixel").get<double>();
   };
   const double first = noise("first"), second = noise("second");
   EXPECT_GT(first, 0);
@@ -348,14 +349,15 @@ TEST_F(CliRender, CompareSubtractsTheReferencesOwnNoise) {
   const auto with_noise = compare("again", "--reference '" + (folder_ / "first" / "reference.pfm").string() + "'");
   ASSERT_EQ(with_noise.exit_code, 0) << with_noise.err;
   EXPECT_NE(read_file(folder_ / "again" / "table.md").find("is subtracted from every MSE"), std::string::npos);
+  std::ofstream(folder_ / "bare.json") << "{\"format\": \"visproxy-scene\"}";  // not the reference's noise
   const auto bare = compare("bare", "--reference '" + (folder_ / "bare.pfm").string() + "'");
   ASSERT_EQ(bare.exit_code, 0) << bare.err;
   EXPECT_NE(read_file(folder_ / "bare" / "table.md").find("is not known"), std::string::npos);
-  std::ofstream(folder_ / "bare.json") << "{\"noise_per_pixel\": -1}";
+  std::ofstream(folder_ / "bare.noise.json") << "{\"noise_per_pixel\": -1}";
   const auto edited = compare("edited", "--reference '" + (folder_ / "bare.pfm").string() + "'");
   EXPECT_EQ(edited.exit_code, 2);
   EXPECT_EQ(edited.err.find('\n'), edited.err.size() - 1) << edited.err;
-  EXPECT_NE(edited.err.find("bare.json"), std::string::npos) << edited.err;
+  EXPECT_NE(edited.err.find("bare.noise.json"), std::string::npos) << edited.err;
   EXPECT_FALSE(std::filesystem::exists(folder_ / "edited" / "table.md"));
 }
 

@@ -761,6 +761,19 @@ TEST(RenderWorld, SplitScenesAnswerAsTheOwnMeshThenTheProxies) {
   const RenderWorld crowded(many, proxies), counting(small, few, {.counting = true});
   EXPECT_FALSE(crowded.has_split_scene(0));
   EXPECT_FALSE(counting.has_split_scene(0));
+  // There, the answers are the own mesh's and then the proxies', one by one.
+  Random random(8);
+  for (int k = 0; k < 500; ++k) {
+    const Vertex from(-3.5 + 7 * random.uniform(), -3.5 + 7 * random.uniform(), -1.4 + 2.6 * random.uniform());
+    const Vertex to(-0.7 + 1.4 * random.uniform(), -0.7 + 1.4 * random.uniform(), 3.99);
+    const int own = k % 8;
+    const SplitAnswer expected = crowded.mesh_blocks(from, to, {.skip = -1, .only = own})              ? SplitAnswer::own_blocks
+                                 : crowded.proxy_blocks(from, to, {.skip = own, .only = -1}) ? SplitAnswer::proxy_blocks
+                                                                                                       : SplitAnswer::clear;
+    std::uint64_t exact = 0, proxy = 0;
+    EXPECT_EQ(crowded.split_blocks(from, to, own, true, exact, proxy), expected) << k;
+    EXPECT_EQ(exact + proxy, expected == SplitAnswer::own_blocks ? 1u : 2u) << k;
+  }
 }
 
 }  // namespace

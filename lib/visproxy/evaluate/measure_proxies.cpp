@@ -202,9 +202,10 @@ json render_share(Scene& scene, const RenderWorld& world, double mesh_ns_per_ray
 //  - Segments from other instances whose rest of the scene lets them through: the proxies
 //    stand in for the mesh there, and their ray types are the proxy's (per proxy).
 //  - Segments from the mesh's own instances: visibility splitting traces the own mesh
-//    exactly and estimates the rest of the scene, as of type 1 (blocked) or 4 (clear) when
-//    its estimate agrees with it. (Other instances of the mesh are taken for their mesh
-//    there: what their proxies would add is left out.) Eq. 8 still adds noise to type 4.
+//    exactly (a segment it blocks is 0, without noise) and estimates the rest of the
+//    scene, as of type 1 (blocked) or 4 (clear) when its estimate agrees with it. (Other
+//    instances of the mesh are taken for their mesh there: what their proxies would add is
+//    left out.) Eq. 8 still adds noise to type 4.
 struct RenderNoise {
   std::size_t samples = 0;
   double exact_variance = 0, exact_variance_error = 0;  // mean per sample, and its standard error
@@ -239,10 +240,13 @@ RenderNoise render_noise(const Scene& scene, const RenderWorld& world, const std
       const ShadowSegment& s = sample.segment;
       if (!world.mesh_blocks(s.from, s.to)) exact[k] += sample.contribution;
       if (mesh_instance[static_cast<std::size_t>(s.instance)]) {
+        // Typed by the rest of the scene, as the renderer's optimal mode counts it; where the
+        // own mesh blocks, splitting answers 0 exactly and no use adds noise.
         const std::size_t type = world.mesh_blocks(s.from, s.to, {.skip = s.instance, .only = -1}) ? 0 : 3;
+        ++noise.own_segments[type];
+        if (world.mesh_blocks(s.from, s.to, {.skip = -1, .only = s.instance})) continue;
         const double squared = sample.contribution.squaredNorm() / 3;
         noise.own[type] += squared, noise.own_squares[type] += squared * squared;
-        ++noise.own_segments[type];
         continue;
       }
       if (rest_world && rest_world->mesh_blocks(s.from, s.to)) continue;

@@ -129,7 +129,8 @@ RenderNoiseRatio render_noise_ratio(const json& noise, ProxyUse use, const UseSe
   }
   if (!(mean > 0)) return result;
   result.ratio = 1 + mean / v;
-  const double n = std::max(r.noise_samples, 1.0);
+  // The two samples of a pair share a pixel: the pairs are the independent draws.
+  const double n = std::max(r.noise_samples / 2, 1.0);
   const double added_error = std::sqrt(std::max(0.0, second - mean * mean) / n);
   const double error = std::hypot(added_error / v, mean * r.exact_variance_error / (v * v));
   result.low = std::max(1.0, result.ratio - 1.96 * error);

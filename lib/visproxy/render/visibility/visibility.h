@@ -108,7 +108,7 @@ ControlVariateSample control_variate_visibility(const RenderWorld& world, const 
 /// `split`, the own instance exactly (unless `own_cannot_block`) and the rest of the scene
 /// through its proxies (RenderWorld::split_blocks); without, every instance's proxy.
 struct ProxyAnswer {
-  bool own_blocks = false;     ///< the own instance blocked the segment: V = 0, the proxies were not asked
+  bool own_blocks = false;     ///< the own instance blocked the segment: V = 0, whatever the proxies answer
   bool proxy_blocked = false;  ///< V' of the rest of the scene (or of the whole scene without split)
   InstanceFilter rest;         ///< what the proxies stood for: the exact geometry a correction traces
 };

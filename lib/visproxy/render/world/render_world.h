@@ -115,7 +115,7 @@ inline constexpr std::size_t kSplitScenesUpTo = 31;
 /// splitting, eq. 27 of Billen et al.).
 enum class SplitAnswer {
   clear,         ///< neither the own mesh nor another instance's proxy
-  own_blocks,    ///< the own mesh (the proxies were not asked)
+  own_blocks,    ///< the own mesh (whatever the proxies answer)
   proxy_blocks,  ///< another instance's proxy, and not the own mesh
 };
 
@@ -211,9 +211,9 @@ class RenderWorld {
   /// false: the caller knows the mesh cannot block it) and the other instances' proxies of
   /// `proxies` among `rest_bits` (instance_bit()s). The answer is that of mesh_blocks(own
   /// only) followed, if clear, by proxy_blocks or outside_blocks with {skip own, rest_bits};
-  /// with split scenes a clear segment takes one traversal in place of two, and a blocked
-  /// one asks the own mesh alone which of the two it was. `exact_queries` and
-  /// `proxy_queries` count the queries made (the joint one as a proxy query).
+  /// with split scenes it takes one traversal in place of two (a hit on the own mesh ends
+  /// it, the proxies' hits are only noted). `exact_queries` and `proxy_queries` count the
+  /// queries made (the joint one as a proxy query).
   SplitAnswer split_blocks(const Vertex& from, const Vertex& to, int own, bool trace_own, std::uint64_t& exact_queries,
                            std::uint64_t& proxy_queries, SplitProxies proxies = SplitProxies::stochastic,
                            unsigned rest_bits = 0x7FFFFFFFu) const;
