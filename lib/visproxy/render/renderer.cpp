@@ -50,10 +50,7 @@ std::vector<ShadowSegment> scene_shadow_segments(const Scene& scene, const Rende
     const LightSample y = lights.sample(random);
     if (!hit || hit->light >= 0 || exclude[static_cast<std::size_t>(hit->instance)]) continue;
     const Vertex x = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
-    const Vertex to_light = y.position - x;
-    double cos_y = -y.normal.dot(to_light);
-    if (y.two_sided) cos_y = std::abs(cos_y);
-    if (hit->normal.dot(to_light) <= 0 || cos_y <= 0) continue;
+    if (!light_geometry(x, hit->normal, y)) continue;
     segments.push_back({x, light_end(world, y, x), hit->instance});
   }
   return segments;
@@ -82,14 +79,10 @@ std::vector<std::array<CameraSample, 2>> scene_sample_pairs(const Scene& scene, 
       // As direct_light() draws it: one point on the lights by area.
       const LightSample y = lights.sample(random);
       const Vertex x = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
-      const Vertex to_light = y.position - x;
-      const double distance2 = to_light.squaredNorm(), distance = std::sqrt(distance2);
-      const double cos_x = hit->normal.dot(to_light) / distance;
-      double cos_y = -y.normal.dot(to_light) / distance;
-      if (y.two_sided) cos_y = std::abs(cos_y);
-      if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) continue;
+      const std::optional<LightGeometry> g = light_geometry(x, hit->normal, y);
+      if (!g) continue;
       const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
-      sample.contribution = brdf.cwiseProduct(y.radiance) * (cos_x * cos_y / distance2 * lights.total_area());
+      sample.contribution = brdf.cwiseProduct(y.radiance) * (g->cos_x * g->cos_y / g->distance2 * lights.total_area());
       sample.has_segment = true;
       sample.segment = {x, light_end(world, y, x), hit->instance};
     }

@@ -27,16 +27,11 @@ Color direct_light(const IntegratorContext& context, const ShadingPoint& point, 
   Color radiance = Color::Zero();
   for (int s = 0; s < context.options.shadow_rays; ++s) {
     const LightSample y = lights.sample(random);
-    const Vertex to_light = y.position - x;
-    const double distance2 = to_light.squaredNorm();
-    const double distance = std::sqrt(distance2);
-    const double cos_x = point.hit->normal.dot(to_light) / distance;
-    double cos_y = -y.normal.dot(to_light) / distance;
-    if (y.two_sided) cos_y = std::abs(cos_y);
-    if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) continue;
+    const std::optional<LightGeometry> g = light_geometry(x, point.hit->normal, y);
+    if (!g) continue;
     ++stats.shadow_rays;
     const double v = visibility.to_light(light_end(context.world, y, x));
-    if (v != 0) radiance += (v * cos_x * cos_y / distance2 * lights.total_area()) * y.radiance;
+    if (v != 0) radiance += (v * g->cos_x * g->cos_y / g->distance2 * lights.total_area()) * y.radiance;
   }
   return radiance;
 }

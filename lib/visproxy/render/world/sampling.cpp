@@ -28,6 +28,17 @@ LightSample LightSampler::sample(PixelRandom& random) const {
           t.light->two_sided};
 }
 
+std::optional<LightGeometry> light_geometry(const Vertex& x, const Vertex& normal, const LightSample& y) {
+  const Vertex to_light = y.position - x;
+  const double distance2 = to_light.squaredNorm();
+  const double distance = std::sqrt(distance2);
+  const double cos_x = normal.dot(to_light) / distance;
+  double cos_y = -y.normal.dot(to_light) / distance;
+  if (y.two_sided) cos_y = std::abs(cos_y);
+  if (cos_x <= 0 || cos_y <= 0 || distance2 == 0) return std::nullopt;
+  return LightGeometry{cos_x, cos_y, distance2};
+}
+
 Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& normal, const Vertex& from, double distance) {
   const double side = normal.dot(from - end) >= 0 ? 1.0 : -1.0;
   return end + side * world.surface_offset(end, distance) * normal;

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "visproxy/render/world/render_world.h"
@@ -71,6 +72,15 @@ Vertex segment_end(const RenderWorld& world, const Vertex& end, const Vertex& no
 inline Vertex light_end(const RenderWorld& world, const LightSample& y, const Vertex& x) {
   return segment_end(world, y.position, y.normal, x);
 }
+
+/// The geometry of a Lambertian point's segment to a light sample, as direct light weighs
+/// it: the cosines at the point (of unit normal `normal`) and at the light, and the squared
+/// distance. None when the light lies behind the point or the point behind a one-sided
+/// light, or the two coincide: such a sample adds nothing and traces no segment.
+struct LightGeometry {
+  double cos_x = 0, cos_y = 0, distance2 = 0;
+};
+std::optional<LightGeometry> light_geometry(const Vertex& x, const Vertex& normal, const LightSample& y);
 
 /// The pinhole camera's rays through jittered points of pixels.
 class CameraRays {
