@@ -238,17 +238,20 @@ RenderNoise render_noise(const Scene& scene, const RenderWorld& world, const std
       exact[k] = sample.emitted;
       if (!sample.has_segment) continue;
       const ShadowSegment& s = sample.segment;
-      if (!world.mesh_blocks(s.from, s.to)) exact[k] += sample.contribution;
       if (mesh_instance[static_cast<std::size_t>(s.instance)]) {
         // Typed by the rest of the scene, as the renderer's optimal mode counts it; where the
         // own mesh blocks, splitting answers 0 exactly and no use adds noise.
-        const std::size_t type = world.mesh_blocks(s.from, s.to, {.skip = s.instance, .only = -1}) ? 0 : 3;
+        const bool rest_blocks = world.mesh_blocks(s.from, s.to, {.skip = s.instance, .only = -1});
+        const bool own_blocks = world.mesh_blocks(s.from, s.to, {.skip = -1, .only = s.instance});
+        if (!rest_blocks && !own_blocks) exact[k] += sample.contribution;
+        const std::size_t type = rest_blocks ? 0 : 3;
         ++noise.own_segments[type];
-        if (world.mesh_blocks(s.from, s.to, {.skip = -1, .only = s.instance})) continue;
+        if (own_blocks) continue;
         const double squared = sample.contribution.squaredNorm() / 3;
         noise.own[type] += squared, noise.own_squares[type] += squared * squared;
         continue;
       }
+      if (!world.mesh_blocks(s.from, s.to)) exact[k] += sample.contribution;
       if (rest_world && rest_world->mesh_blocks(s.from, s.to)) continue;
       noise.segments.push_back({s.from, s.to});
       noise.squared.push_back(sample.contribution.squaredNorm() / 3);

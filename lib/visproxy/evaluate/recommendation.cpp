@@ -175,9 +175,7 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
       for (std::size_t t = 0; t < 4; ++t) {
         r.own_noise[t] = noise->at("own_instances_squared_contribution_by_type").at(t).get<double>();
         r.own_noise_squares[t] = noise->at("own_instances_squared_contribution_squares_by_type").at(t).get<double>();
-        r.own_segments[t] = noise->contains("own_instances_segments_by_type")
-                                ? noise->at("own_instances_segments_by_type").at(t).get<std::uint64_t>()
-                                : 0;
+        r.own_segments[t] = noise->at("own_instances_segments_by_type").at(t).get<std::uint64_t>();
       }
     }
   }
@@ -228,7 +226,7 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
             UseSetting setting = figures.prediction.setting, own_setting = setting;
             const double ray_cost_ratio = figures.prediction.ns_per_ray / costs.mesh_ns;
             double cost_ratio = ray_cost_ratio;
-            if (kProxyUses[u] == ProxyUse::term_choice && noise->contains("segments_by_type")) {
+            if (kProxyUses[u] == ProxyUse::term_choice) {
               // Over the render, eq. 8 at the probabilities the renderer's optimal mode finds.
               const std::size_t instances = measured.contains("rays") ? measured["rays"].value("instances_of_mesh", std::size_t{1}) : 1;
               std::tie(setting.term, own_setting.term) = render_optimal_probabilities(*noise, p.proved, instances, r);
