@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "visproxy/core/random.h"
@@ -259,6 +261,103 @@ TEST(ControlVariate, ProbabilitiesFollowTheRootOfTheDisagreement) {
   EXPECT_EQ(from.disagreed[0], 3u);
   EXPECT_EQ(from.seen[1], 47u);  // the proxy blocked types 1 and 3
   EXPECT_EQ(from.disagreed[1], 7u);
+}
+
+// The learned, cost-aware choice: the q it returns minimises variance x cost over the
+// box [floor, 1]^2 (checked against a grid of 201 x 201 points, which it may not beat), with
+// the evidence's estimates drawn towards the prior by its weight, and it traces exactly
+// exactly when that minimum is not below kLearnedPaysBelow x exact's variance x cost.
+TEST(ControlVariate, LearnedChoiceMinimisesVarianceTimesCostAndTracesExactlyWhenItDoesNotPay) {
+  struct Case {
+    ProxyKind kind;
+    std::array<std::uint64_t, 2> answered, seen, disagreed;
+    CorrectionCosts costs;
+    CorrectionPrior prior = {};
+  };
+  const std::vector<Case> cases = {
+      {ProxyKind::general, {300, 100}, {40, 60}, {4, 30}, {.base = 10, .correction = 12, .exact = 18, .variance = 0.3}},
+      {ProxyKind::outside, {900, 100}, {0, 100}, {0, 2}, {.base = 6, .correction = 14, .exact = 18, .variance = 0.05}},
+      {ProxyKind::inside, {50, 50}, {50, 0}, {25, 0}, {.base = 12, .correction = 12, .exact = 16, .variance = 0.02}},
+      {ProxyKind::general, {0, 0}, {0, 0}, {0, 0}, {.base = 3, .correction = 20, .exact = 21, .variance = 1.5}},
+      {ProxyKind::general, {10, 990}, {5, 600}, {0, 599}, {.base = 9, .correction = 9, .exact = 12, .variance = 0.01}},
+      // A pixel with no evidence yet, and one with a little, start from an instance's prior.
+      {ProxyKind::outside, {0, 0}, {0, 0}, {0, 0}, {.base = 6, .correction = 14, .exact = 18, .variance = 0.05},
+       {.share = {0.9, 0.1}, .disagreeing = {0.001, 0.02}, .weight = 16}},
+      {ProxyKind::general, {3, 1}, {3, 1}, {1, 1}, {.base = 10, .correction = 12, .exact = 18, .variance = 0.3},
+       {.share = {0.7, 0.3}, .disagreeing = {0.01, 0.4}, .weight = 16}},
+  };
+  for (const Case& c : cases) {
+    CorrectionEvidence evidence;
+    evidence.answered = c.answered, evidence.seen = c.seen, evidence.disagreed = c.disagreed;
+    const CorrectionOptions options{.scale = 2, .floor = 0.05};
+    const LearnedChoice choice = learned_choice(c.kind, evidence, c.costs, options, c.prior);
+    // The product as the documentation states it, from the evidence and the prior.
+    const double n = static_cast<double>(c.answered[0] + c.answered[1]);
+    auto product = [&](double q0, double q1) {
+      double variance = c.costs.variance, cost = c.costs.base;
+      const std::array<double, 2> q = {q0, q1};
+      for (std::size_t i = 0; i < 2; ++i) {
+        if (q[i] == 0) continue;
+        const double w = c.prior.weight;
+        const double s = (static_cast<double>(c.answered[i]) + w * c.prior.share[i]) / (n + w);
+        const double p = (static_cast<double>(c.disagreed[i]) + w * c.prior.disagreeing[i]) / (static_cast<double>(c.seen[i]) + w);
+        variance += s * p * (1 / q[i] - 1);
+        cost += c.costs.correction * s * q[i];
+      }
+      return variance * cost;
+    };
+    EXPECT_EQ(choice.q.after_miss == 0, c.kind == ProxyKind::outside);
+    EXPECT_EQ(choice.q.after_hit == 0, c.kind == ProxyKind::inside);
+    const double chosen = product(choice.q.after_miss, choice.q.after_hit);
+    double grid = std::numeric_limits<double>::infinity();
+    for (int a = 0; a <= 200; ++a)
+      for (int b = 0; b <= 200; ++b) {
+        const double q0 = c.kind == ProxyKind::outside ? 0.0 : 0.05 + 0.95 * a / 200.0;
+        const double q1 = c.kind == ProxyKind::inside ? 0.0 : 0.05 + 0.95 * b / 200.0;
+        grid = std::min(grid, product(q0, q1));
+      }
+    EXPECT_LE(chosen, grid * (1 + 1e-12)) << "case " << (&c - cases.data());
+    EXPECT_NEAR(choice.predicted_ratio, chosen / (c.costs.variance * c.costs.exact), 1e-12 * choice.predicted_ratio);
+    EXPECT_EQ(choice.trace_exactly, !(choice.predicted_ratio < kLearnedPaysBelow));
+    EXPECT_TRUE(choice.can_pay);  // every case's proxy query is cheaper than the exact one
+  }
+  // The prior decides a pixel with no evidence: the cheap outside proxy, rarely wrong,
+  // pays; the same proxy said to block most segments, wrongly on 90 % of them, does not.
+  const CorrectionCosts cheap{.base = 6, .correction = 14, .exact = 18, .variance = 0.05};
+  EXPECT_FALSE(learned_choice(ProxyKind::outside, {}, cheap, {}, {.share = {0.9, 0.1}, .disagreeing = {0.001, 0.02}, .weight = 16})
+                   .trace_exactly);
+  EXPECT_TRUE(learned_choice(ProxyKind::outside, {}, cheap, {}, {.share = {0.2, 0.8}, .disagreeing = {0.001, 0.9}, .weight = 16})
+                  .trace_exactly);
+  // A proxy query that costs what the exact one does never pays, however well it agrees.
+  CorrectionEvidence agreeing;
+  agreeing.answered = {1000, 1000}, agreeing.seen = {1000, 1000};
+  const LearnedChoice costly = learned_choice(ProxyKind::general, agreeing, {.base = 10, .correction = 8, .exact = 10, .variance = 0.2});
+  EXPECT_TRUE(costly.trace_exactly);
+  EXPECT_FALSE(costly.can_pay);  // nothing the pixel could learn would change that: no exploring
+  // A cheap outside proxy that has never been wrong, in open light: the proxy alone.
+  CorrectionEvidence open;
+  open.answered = {1000, 0};
+  const LearnedChoice free = learned_choice(ProxyKind::outside, open, {.base = 4, .correction = 8, .exact = 10, .variance = 0.2});
+  EXPECT_FALSE(free.trace_exactly);
+  EXPECT_TRUE(free.can_pay);
+  EXPECT_LT(free.predicted_ratio, 0.45);
+  // A predicted gain within the cost model's error is not taken.
+  const LearnedChoice marginal = learned_choice(ProxyKind::outside, open, {.base = 9.5, .correction = 8, .exact = 10, .variance = 0.2});
+  EXPECT_GT(marginal.predicted_ratio, kLearnedPaysBelow);
+  EXPECT_LT(marginal.predicted_ratio, 1.0);
+  EXPECT_TRUE(marginal.trace_exactly);
+  // A cheap proxy that disagrees half the time where the render has little other noise.
+  CorrectionEvidence wrong;
+  wrong.answered = {500, 500}, wrong.seen = {500, 500}, wrong.disagreed = {250, 250};
+  EXPECT_TRUE(learned_choice(ProxyKind::general, wrong, {.base = 2, .correction = 9, .exact = 10, .variance = 0.25}).trace_exactly);
+  // Costs it cannot use (none modelled, or no noise measured): the cost-blind rule, never exact.
+  for (const CorrectionCosts& unusable : {CorrectionCosts{}, CorrectionCosts{.base = 1, .correction = 1, .exact = 1, .variance = 0},
+                                          CorrectionCosts{.base = std::nan(""), .correction = 1, .exact = 1, .variance = 1}}) {
+    const LearnedChoice blind = learned_choice(ProxyKind::general, wrong, unusable);
+    EXPECT_FALSE(blind.trace_exactly);
+    EXPECT_EQ(blind.q.after_miss, correction_probabilities(ProxyKind::general, wrong).after_miss);
+    EXPECT_EQ(blind.q.after_hit, correction_probabilities(ProxyKind::general, wrong).after_hit);
+  }
 }
 
 }  // namespace

@@ -185,4 +185,67 @@ CorrectionProbabilities correction_probabilities(ProxyKind kind, const Correctio
   return {kind == ProxyKind::outside ? 0.0 : side(0), kind == ProxyKind::inside ? 0.0 : side(1)};
 }
 
+LearnedChoice learned_choice(ProxyKind kind, const CorrectionEvidence& evidence, const CorrectionCosts& costs,
+                             const CorrectionOptions& options, const CorrectionPrior& prior) {
+  LearnedChoice choice;
+  const bool usable = std::isfinite(costs.base) && std::isfinite(costs.correction) && std::isfinite(costs.exact) &&
+                      std::isfinite(costs.variance) && costs.base > 0 && costs.correction > 0 && costs.exact > 0 &&
+                      costs.variance > 0;
+  if (!usable) {
+    choice.q = correction_probabilities(kind, evidence, options);
+    return choice;
+  }
+  const std::array<bool, 2> needed = {kind != ProxyKind::outside, kind != ProxyKind::inside};
+  const double answered = static_cast<double>(evidence.answered[0] + evidence.answered[1]);
+  std::array<double, 2> s{}, p{};
+  double disagreeing = 0;  // sum_i s_i p_i
+  for (std::size_t i = 0; i < 2; ++i) {
+    s[i] = (static_cast<double>(evidence.answered[i]) + prior.weight * prior.share[i]) / (answered + prior.weight);
+    p[i] = needed[i] ? (static_cast<double>(evidence.disagreed[i]) + prior.weight * prior.disagreeing[i]) /
+                           (static_cast<double>(evidence.seen[i]) + prior.weight)
+                     : 0.0;
+    disagreeing += s[i] * p[i];
+  }
+  const double floor = std::clamp(options.floor, 1e-6, 1.0);
+  const double factor = 0.5 * options.scale;
+  auto product = [&](const std::array<double, 2>& q) {  // variance x cost
+    double variance = costs.variance - disagreeing, cost = costs.base;
+    for (std::size_t i = 0; i < 2; ++i)
+      if (needed[i]) variance += s[i] * p[i] / q[i], cost += costs.correction * s[i] * q[i];
+    return variance * cost;
+  };
+  // The optimum with both sides free is q_i = sqrt(p_i base / (correction (T - sum s p))); a
+  // side held at the floor or at 1 moves its terms into those constants. Every choice of
+  // held sides is tried and the least product kept.
+  double best = kInfinity;
+  std::array<double, 2> best_q{};
+  for (int held0 = 0; held0 < 3; ++held0)
+    for (int held1 = 0; held1 < 3; ++held1) {
+      const std::array<int, 2> held = {held0, held1};  // 0 free, 1 at the floor, 2 at 1
+      std::array<double, 2> q{};
+      double rest = costs.variance - disagreeing, base = costs.base;
+      for (std::size_t i = 0; i < 2; ++i)
+        if (needed[i] && held[i] != 0) {
+          q[i] = held[i] == 1 ? floor : 1.0;
+          rest += s[i] * p[i] / q[i], base += costs.correction * s[i] * q[i];
+        }
+      const double t = rest > 0 ? factor * std::sqrt(base / (costs.correction * rest)) : kInfinity;
+      for (std::size_t i = 0; i < 2; ++i)
+        if (needed[i] && held[i] == 0) q[i] = std::clamp(t * std::sqrt(p[i]), floor, 1.0);
+      const double value = product(q);
+      if (value < best) best = value, best_q = q;
+    }
+  choice.q = {best_q[0], best_q[1]};
+  choice.predicted_ratio = best / (costs.variance * costs.exact);
+  // The control variate's variance is never below T (q <= 1), and its cost never below the
+  // proxy query with every needed side corrected at the floor: if that is not below
+  // kLearnedPaysBelow x exact's cost, no evidence can make the proxy pay.
+  double least_cost = costs.base;
+  for (std::size_t i = 0; i < 2; ++i)
+    if (needed[i]) least_cost += costs.correction * s[i] * floor;
+  choice.can_pay = least_cost < kLearnedPaysBelow * costs.exact;
+  choice.trace_exactly = !(choice.predicted_ratio < kLearnedPaysBelow);
+  return choice;
+}
+
 }  // namespace visproxy

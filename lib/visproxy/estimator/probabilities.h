@@ -122,10 +122,15 @@ struct CorrectionEvidence {
 
   /// From probe rays, each of which traced both.
   static CorrectionEvidence from(const RayTypeCounts& counts);
+  /// How many segments the proxy answered on each side, traced or not (the learned,
+  /// cost-aware rule weighs its sides by them; correction_probabilities() does not use them).
+  std::array<std::uint64_t, 2> answered{};
+
   void add(bool proxy_blocked, bool mesh_blocked) {
     ++seen[proxy_blocked ? 1 : 0];
     disagreed[proxy_blocked ? 1 : 0] += proxy_blocked != mesh_blocked ? 1 : 0;
   }
+  void answer(bool proxy_blocked) { ++answered[proxy_blocked ? 1 : 0]; }
 };
 
 struct CorrectionOptions {
@@ -144,5 +149,61 @@ struct CorrectionOptions {
 /// Sides the kind does not need (an outside proxy's misses, an inside proxy's hits) get 0.
 CorrectionProbabilities correction_probabilities(ProxyKind kind, const CorrectionEvidence& evidence,
                                                  const CorrectionOptions& options = {});
+
+/// What a segment costs a render, in one unit of modelled work (RenderWorld's query model,
+/// render/world/query_costs.h), and how noisy the render is without the proxy: what the
+/// learned control variate weighs its corrections and its proxy against.
+struct CorrectionCosts {
+  double base = 0;        ///< the sample's share of camera ray and shading, plus the proxy query
+  double correction = 0;  ///< one correction: the exact geometry the proxy stood for
+  double exact = 0;       ///< the sample's share of camera ray and shading, plus the exact query
+  /// The exact render's variance per segment, relative to the mean squared unoccluded
+  /// contribution of a segment: the noise every segment carries before a proxy adds any.
+  double variance = 0;
+};
+
+/// What learned_choice() assumes of a pixel before its own evidence: the share of segments
+/// the proxy answers each way (let through, blocked) and the fraction of each it answers
+/// wrongly, worth `weight` segments of the pixel's own. The default, half and half worth one
+/// segment, is the Krichevsky-Trofimov estimate; a render gives each instance the rates of
+/// its segments traced before the render.
+struct CorrectionPrior {
+  std::array<double, 2> share = {0.5, 0.5};
+  std::array<double, 2> disagreeing = {0.5, 0.5};
+  double weight = 1;
+};
+
+/// learned_choice() gives the control variate a pixel only where its predicted variance x
+/// cost is below this fraction of exact's: the modelled costs (render/world/query_costs.h)
+/// put the shadow queries' share of a sample's time above what renders of the bench scenes
+/// measure (by up to 1.5x on cow-field), so a smaller predicted gain may be none.
+inline constexpr double kLearnedPaysBelow = 0.9;
+
+/// The learned, cost-aware choice for one segment: whether to trace the mesh exactly, and
+/// if not, the control variate's probabilities.
+struct LearnedChoice {
+  bool trace_exactly = false;
+  CorrectionProbabilities q;
+  double predicted_ratio = 1;  ///< (variance x cost) of the control variate over exact's: >= 1 chooses exact
+  /// Whether any evidence could make the proxy pay: its query, with every needed side
+  /// corrected at the floor, costs less than kLearnedPaysBelow x the exact query (false:
+  /// nothing to learn).
+  bool can_pay = true;
+};
+
+/// From the evidence (answered[i]: the share s_i of each side; seen/disagreed: the
+/// disagreeing fraction p_i, each with the prior's pseudo-segments added) and the costs, the q that
+/// minimises the control variate's variance x cost,
+///   (T + sum_i s_i p_i (1/q_i - 1)) x (base + correction sum_i s_i q_i),   T = costs.variance,
+/// over q_i in [floor, 1]: with both sides free, q_i = sqrt(p_i base / (correction (T - sum_i
+/// s_i p_i))) (1 when the bracket is not positive); a side held at the floor or at 1 moves
+/// its terms into those constants, and the least product over the choices of held sides is
+/// kept. options.scale / 2 multiplies the free sides' q (the default 2: the optimum).
+/// trace_exactly when that product is not below kLearnedPaysBelow x T x exact (exact's
+/// variance x cost): the control variate would not pay for this pixel. Sides the kind does not need get q = 0 and
+/// p = 0. Costs that are not all positive and finite, or T not positive, give the
+/// cost-blind correction_probabilities() and never trace exactly.
+LearnedChoice learned_choice(ProxyKind kind, const CorrectionEvidence& evidence, const CorrectionCosts& costs,
+                             const CorrectionOptions& options = {}, const CorrectionPrior& prior = {});
 
 }  // namespace visproxy
