@@ -4,6 +4,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -23,17 +24,17 @@ namespace {
 using testing::box;
 using testing::quad;
 
-// A floor (instance 0) and a ball of radius 1 at (0, 0, 2) (instance 1) whose proxy is
-// `proxy`; the floor has none.
+// A floor (instance 0) and a ball of radius 1 at (0, 0, 2) (instance 1, an icosphere of
+// `ball_levels` subdivisions: 1280 triangles at 3) whose proxy is `proxy`; the floor has none.
 struct TwoInstances {
   Scene scene;
   std::vector<MeshProxies> proxies;
 };
 
-TwoInstances scene_with(const InstanceProxy& proxy) {
+TwoInstances scene_with(const InstanceProxy& proxy, int ball_levels = 3) {
   TwoInstances s;
   s.scene.meshes.push_back({"floor", {}, quad({-4, -4, 0}, {8, 0, 0}, {0, 8, 0}), {}});
-  s.scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 2}, 1.0}}, 3), {}});
+  s.scene.meshes.push_back({"ball", {}, sphere_set_mesh({{{0, 0, 2}, 1.0}}, ball_levels), {}});
   s.scene.instances.push_back({"floor", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
   s.scene.instances.push_back({"ball", Eigen::Affine3d::Identity(), Color::Constant(0.5), {}});
   AreaLight light;
@@ -209,8 +210,8 @@ TEST(StochasticVisibility, ProxiesAndMeshesAnswerAsDesigned) {
 
 // The scene of scene_with(proxy) seen from low beside the ball, 8 x 8 pixels, so that
 // most pixels show the floor in the ball's penumbra.
-TwoInstances penumbra_view(const InstanceProxy& proxy) {
-  TwoInstances s = scene_with(proxy);
+TwoInstances penumbra_view(const InstanceProxy& proxy, int ball_levels = 3) {
+  TwoInstances s = scene_with(proxy, ball_levels);
   s.scene.camera.from = {0, -3.2, 0.6};
   s.scene.camera.at = {0, 0, 0};
   s.scene.camera.up = {0, 0, 1};
@@ -276,17 +277,24 @@ TEST(StochasticVisibility, OptimalProbabilitiesAreOneSetAndLowerEq8sNoise) {
 // is printed, and it must be below 5 % of the mean penumbra radiance (measured: 1.1 % for
 // the control variate with an inside proxy to 4.8 % for eq. 8 with a general one, at 128
 // shadow rays per pixel and seed); the pairing's standard error must be below the
-// unpaired comparison's of as many renders (measured: 1.3 to 3 times below).
+// unpaired comparison's of as many renders (measured: 1.3 to 3 times below). The learned
+// control variate traces exactly where its proxy does not pay (the coarse ball's box and
+// general proxy): the fourth case, a ball proxy of a 20 480-triangle ball, is one where it
+// pays; wherever most of its segments took the control variate, its noise must show.
 TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
-  const std::vector<InstanceProxy> proxies = {
-      {ProxyKind::outside, "aabb", box({-1, -1, 1}, {1, 1, 3}), {}, true},
-      {ProxyKind::inside, "inside:1", {}, {{{0, 0, 2}, 0.9}}, true},
-      {ProxyKind::general, "general", sphere_set_mesh({{{0.3, 0, 2}, 0.8}}, 2), {}}};
+  struct Case {
+    InstanceProxy proxy;
+    int ball_levels;
+  };
+  const std::vector<Case> cases = {{{ProxyKind::outside, "aabb", box({-1, -1, 1}, {1, 1, 3}), {}, true}, 3},
+                                   {{ProxyKind::inside, "inside:1", {}, {{{0, 0, 2}, 0.9}}, true}, 3},
+                                   {{ProxyKind::general, "general", sphere_set_mesh({{{0.3, 0, 2}, 0.8}}, 2), {}}, 3},
+                                   {{ProxyKind::general, "ball of a fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5}};
   constexpr int seeds = 64;
   constexpr double critical = 5.42, power = 1.30;
   constexpr double kDetectableBias = 0.05;  // of the mean penumbra radiance, power 0.9
-  for (const InstanceProxy& proxy : proxies) {
-    const TwoInstances s = penumbra_view(proxy);
+  for (const auto& [proxy, ball_levels] : cases) {
+    const TwoInstances s = penumbra_view(proxy, ball_levels);
     const RenderWorld world(s.scene, s.proxies);
     struct Variant {
       StochasticEstimator estimator;
@@ -302,6 +310,7 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
                                 std::string(name_of(variant.probabilities));
       const std::size_t n = 64;
       std::vector<std::vector<double>> exact(seeds), difference(seeds);
+      std::uint64_t segments = 0, traced_exactly = 0;
       for (int seed = 0; seed < seeds; ++seed) {
         const RenderOptions exact_options{.spp = 32, .shadow_rays = 4, .seed = 1000u + static_cast<unsigned>(seed)};
         RenderOptions stochastic = exact_options;
@@ -312,7 +321,11 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
         stochastic.probe_rays = 4;
         stochastic.probe_passes = variant.estimator == StochasticEstimator::control_variate ? 2 : 0;
         stochastic.correction_scale = 0.5;  // aggressive: most corrections skipped
-        const Image a = render(s.scene, world, exact_options).image, b = render(s.scene, world, stochastic).image;
+        const Image a = render(s.scene, world, exact_options).image;
+        const RenderResult stochastic_result = render(s.scene, world, stochastic);
+        const Image& b = stochastic_result.image;
+        segments += stochastic_result.stats.shadow_rays;
+        traced_exactly += stochastic_result.stats.control_variate.traced_exactly;
         ASSERT_TRUE(all_finite(b));
         for (std::size_t i = 0; i < n; ++i) {
           exact[seed].push_back(a.pixels[i].x());
@@ -347,7 +360,17 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
         EXPECT_LE(std::abs(mean), critical * error + 1e-12) << label << " pixel " << i;
         noisy += error > 0 ? 1 : 0;
       }
-      EXPECT_GT(noisy, 0) << label;  // the estimator did work: it adds noise where proxy and mesh disagree
+      // The estimator did work: it adds noise where proxy and mesh disagree. (The learned
+      // control variate may give its penumbra pixels to exact tracing and keep the rest,
+      // where proxy and mesh agree and a skipped correction adds no noise; the fine ball's
+      // proxy pays, and there it must estimate most segments.)
+      const double estimated = 1 - static_cast<double>(traced_exactly) / static_cast<double>(segments);
+      if (ball_levels == 5) {
+        EXPECT_GT(estimated, 0.5) << label;
+      }
+      if (estimated > 0.5) {
+        EXPECT_GT(noisy, 0) << label << ", segments estimated " << estimated;
+      }
       const auto [bias, error] = mean_and_error([&](int seed) {
         double sum = 0;
         for (const std::size_t i : penumbra) sum += difference[seed][i];
@@ -363,13 +386,79 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
       const double unpaired = std::hypot(mean_and_error([&](int seed) { return penumbra_mean(seed, false); }).second,
                                          mean_and_error([&](int seed) { return penumbra_mean(seed, true); }).second);
       const double detectable = (critical + power) * error;
-      std::printf("%-40s penumbra pixels %2zu, mean D %+.2e +- %.2e (unpaired +- %.2e), detectable bias %.2f %% of %.3e\n",
-                  label.c_str(), penumbra.size(), bias, error, unpaired, 100 * detectable / penumbra_radiance, penumbra_radiance);
+      std::printf("%-50s penumbra pixels %2zu, mean D %+.2e +- %.2e (unpaired +- %.2e), detectable bias %.2f %% of %.3e, "
+                  "segments estimated %.3f\n",
+                  label.c_str(), penumbra.size(), bias, error, unpaired, 100 * detectable / penumbra_radiance, penumbra_radiance,
+                  estimated);
       EXPECT_LE(std::abs(bias), critical * error + 1e-12) << label;
       EXPECT_LT(detectable, kDetectableBias * penumbra_radiance) << label;
       EXPECT_LT(error, unpaired) << label;
     }
   }
+}
+
+// The learned control variate weighs its proxy's cost and noise against the mesh's, per
+// pixel (learned_choice with the render's modelled costs): a ball proxy of a 20 480-triangle
+// ball is cheap and rarely wrong, and answers most segments (its pixels need not explore);
+// the box of a coarse ball is wrong on a third of the segments through it and gives way to
+// exact tracing in most pixels, after some exploring; a proxy as costly as the ball's own mesh (the ball itself,
+// moved by 2 % of its radius) can never pay, so no pixel explores it at all. Either way the
+// image stays within the paired noise of exact's (the gate only ever swaps in exact answers).
+TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNotPay) {
+  struct Case {
+    InstanceProxy proxy;
+    int ball_levels;
+    double least_exact_share, most_exact_share;
+    std::optional<bool> explores;  // nullopt: either
+    bool traces_proxy;
+  };
+  const std::vector<Case> cases = {
+      {{ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5, 0.0, 0.3, std::nullopt, true},
+      {{ProxyKind::outside, "aabb", box({-1, -1, 1}, {1, 1, 3}), {}, true}, 3, 0.6, 1.0, true, true},
+      {{ProxyKind::general, "moved ball", sphere_set_mesh({{{0.02, 0, 2}, 1.0}}, 3), {}}, 3, 1.0, 1.0, false, false}};
+  for (const Case& c : cases) {
+    TwoInstances s = penumbra_view(c.proxy, c.ball_levels);
+    s.scene.camera.width = s.scene.camera.height = 16;
+    const RenderWorld world(s.scene, s.proxies);
+    const RenderOptions exact{.spp = 32, .shadow_rays = 4, .seed = 77};
+    RenderOptions learned = exact;
+    learned.visibility = VisibilityMode::stochastic;
+    learned.estimator = StochasticEstimator::control_variate;
+    learned.probabilities = ProbabilityMode::learned;
+    const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, learned);
+    const RenderStats& stats = b.stats;
+    const double share = static_cast<double>(stats.control_variate.traced_exactly) / static_cast<double>(stats.shadow_rays);
+    std::printf("%-12s segments traced exactly %.3f, explored %.4f, corrections per segment %.3f\n", c.proxy.spec.c_str(), share,
+                static_cast<double>(stats.control_variate.explored) / static_cast<double>(stats.shadow_rays),
+                static_cast<double>(stats.control_variate.after_hit + stats.control_variate.after_miss) /
+                    static_cast<double>(stats.shadow_rays));
+    EXPECT_GE(share, c.least_exact_share) << c.proxy.spec;
+    EXPECT_LE(share, c.most_exact_share) << c.proxy.spec;
+    if (c.explores) {
+      EXPECT_EQ(stats.control_variate.explored > 0, *c.explores) << c.proxy.spec;
+    }
+    EXPECT_EQ(stats.proxy_tests > 0, c.traces_proxy) << c.proxy.spec;  // a proxy that cannot pay is never traced
+    // What the choice weighed is in the stats, for both instances.
+    ASSERT_TRUE(stats.learned_costs.is_object()) << c.proxy.spec;
+    EXPECT_GT(stats.learned_costs["noise_per_segment"].get<double>(), 0) << c.proxy.spec;
+    EXPECT_EQ(stats.learned_costs["instances"].size(), 2u) << c.proxy.spec;
+    double difference = 0, total = 0;
+    for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
+      difference += b.image.pixels[i].x() - a.image.pixels[i].x();
+      total += a.image.pixels[i].x();
+    }
+    EXPECT_LT(std::abs(difference), 0.02 * total) << c.proxy.spec;
+  }
+  // The cost-blind rule (adaptive) neither gates nor reports costs.
+  const TwoInstances s = penumbra_view({ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5);
+  const RenderWorld world(s.scene, s.proxies);
+  RenderOptions adaptive_options{.spp = 4, .seed = 77};
+  adaptive_options.visibility = VisibilityMode::stochastic;
+  adaptive_options.estimator = StochasticEstimator::control_variate;
+  adaptive_options.probabilities = ProbabilityMode::adaptive;
+  const RenderResult adaptive = render(s.scene, world, adaptive_options);
+  EXPECT_EQ(adaptive.stats.control_variate.traced_exactly, 0u);
+  EXPECT_TRUE(adaptive.stats.learned_costs.is_null());
 }
 
 }  // namespace

@@ -172,7 +172,9 @@ std::vector<RenderOption> make_options() {
   o.push_back(choice<ProbabilityMode>(
       "probabilities", "--probabilities",
       "stochastic: equal; adaptive (for each shading point from K probe rays); learned (control-variate only: from the "
-      "corrections each pixel traced before, no probe rays); optimal (eq8 only: one set for the image, eq. 8's optimum "
+      "corrections each pixel traced before, no probe rays; with direct light it weighs them against the proxy's and "
+      "the mesh's modelled cost and the render's noise, and traces a pixel's segments exactly where the proxy does not "
+      "pay); optimal (eq8 only: one set for the image, eq. 8's optimum "
       "for the ray types of 20 000 of the scene's shadow segments traced before the render, as 'measure --scene' "
       "predicts with) [default: equal]",
       [](RenderJob& j) -> ProbabilityMode& { return j.options.probabilities; }));
@@ -204,8 +206,9 @@ std::vector<RenderOption> make_options() {
   RenderOption scale =
       real("correction_scale", "--correction-scale",
            "control-variate, adaptive or learned: trace the mesh with probability min(1, scale x sqrt(p)) where the "
-           "proxy's answer is wrong with probability p [default: 2; 0.25 with --integrator vpl, whose hundreds of "
-           "connections per shading point share the variance]",
+           "proxy's answer is wrong with probability p (learned with direct light: scale / 2 times the cost-optimal "
+           "probability) [default: 2; 0.25 with --integrator vpl, whose hundreds of connections per shading point share "
+           "the variance]",
            0.01, 1000, [](RenderJob& j) -> double& { return j.options.correction_scale; });
   scale.set = [flag = scale.flag](RenderJob& job, std::string_view value) {
     job.correction_scale = parse_number<double>(flag, value, 0.01, 1000);

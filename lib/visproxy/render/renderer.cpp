@@ -6,6 +6,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/render/integrators/integrator.h"
 #include "visproxy/render/visibility/visibility.h"
+#include "visproxy/render/world/query_costs.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -117,6 +118,82 @@ std::array<Probabilities, 3> scene_optimal_probabilities(const VisibilityContext
   return optimal;
 }
 
+// ProbabilityMode::learned with the control variate and direct light: per instance, the
+// modelled costs of a segment from its points (render/world/query_costs.h, averaged over the
+// segments of 4000 pairs of camera samples seeded from the render's seed; the camera ray's
+// and shading's work shared among the sample's shadow rays), and the exact render's noise
+// relative to a segment's squared contribution: within each pair (one pixel) the luminance
+// difference of the two samples traced exactly, sum (x_a - x_b)^2 / 2 over sum (c_a^2 +
+// c_b^2) / 2, c a segment's unoccluded contribution. The same segments, traced against the
+// proxies the control variate would ask too, give each instance its prior: the share of its
+// segments the proxy answers each way and how often wrongly, worth kPriorSegments of a
+// pixel's own. An instance none of whose points was met gets what all of them had together.
+// Empty when no sample found a lit segment.
+constexpr double kPriorSegments = 16;
+
+struct SceneCorrectionCosts {
+  std::vector<CorrectionCosts> costs;
+  std::vector<CorrectionPrior> priors;
+  std::vector<SegmentQueryCosts> work;  // per instance, the averages the costs come from
+  double noise = 0;
+};
+
+SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
+  const Scene& scene = context.scene;
+  const RenderWorld& world = context.world;
+  const RenderOptions& options = context.options;
+  const std::size_t n = scene.instances.size();
+  const Vertex camera = CameraRays(scene.camera).origin();
+  const double per_segment = 1.0 / std::max(options.shadow_rays, 1);  // a camera sample's share
+  std::vector<SegmentQueryCosts> sums(n + 1);  // the last: every instance
+  std::vector<double> counts(n + 1, 0.0);
+  std::vector<CorrectionEvidence> evidence(n + 1);
+  RenderStats uncounted;  // the proxy queries below are not the render's
+  double noise = 0, squares = 0;
+  auto luminance = [](const Color& c) { return c.mean(); };
+  for (const std::array<CameraSample, 2>& pair : scene_sample_pairs(scene, world, 4000, options.seed ^ 0x636F737473ULL)) {
+    std::array<double, 2> value{};
+    for (std::size_t k = 0; k < 2; ++k) {
+      const CameraSample& sample = pair[k];
+      value[k] = luminance(sample.emitted);
+      if (!sample.has_segment) continue;
+      const ShadowSegment& s = sample.segment;
+      const double c = luminance(sample.contribution);
+      squares += c * c / 2;
+      if (!world.mesh_blocks(s.from, s.to)) value[k] += c;
+      const SegmentQueryCosts q = segment_query_costs(world, camera, s.from, s.to, s.instance, options.split);
+      const ProxyAnswer answer = proxy_answer(world, s.from, s.to, s.instance, options.split, uncounted, false);
+      const bool mesh = !answer.own_blocks && world.mesh_blocks(s.from, s.to, answer.rest);
+      for (const std::size_t i : {static_cast<std::size_t>(s.instance), n}) {
+        sums[i].camera += q.camera * per_segment, sums[i].exact += q.exact, sums[i].proxy += q.proxy;
+        sums[i].correction += q.correction;
+        counts[i] += 1;
+        if (!answer.own_blocks) evidence[i].answer(answer.proxy_blocked), evidence[i].add(answer.proxy_blocked, mesh);
+      }
+    }
+    noise += (value[0] - value[1]) * (value[0] - value[1]) / 2;
+  }
+  SceneCorrectionCosts result;
+  if (!(counts[n] > 0) || !(squares > 0) || !(noise > 0)) return result;  // nothing to weigh: the cost-blind rule
+  result.noise = noise / squares;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t from = counts[i] > 0 ? i : n;
+    const double m = counts[from];
+    const CorrectionEvidence& e = evidence[from];
+    CorrectionPrior prior{.weight = kPriorSegments};
+    const double answered = static_cast<double>(e.answered[0] + e.answered[1]);
+    for (std::size_t side = 0; side < 2; ++side) {  // Krichevsky-Trofimov: never exactly 0 or 1
+      prior.share[side] = (static_cast<double>(e.answered[side]) + 0.5) / (answered + 1);
+      prior.disagreeing[side] = (static_cast<double>(e.disagreed[side]) + 0.5) / (static_cast<double>(e.seen[side]) + 1);
+    }
+    result.priors.push_back(prior);
+    const SegmentQueryCosts w{sums[from].camera / m, sums[from].exact / m, sums[from].proxy / m, sums[from].correction / m};
+    result.work.push_back(w);
+    result.costs.push_back({.base = w.camera + w.proxy, .correction = w.correction, .exact = w.camera + w.exact, .variance = result.noise});
+  }
+  return result;
+}
+
 }  // namespace
 
 RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
@@ -129,9 +206,16 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
   const bool counting = world.counting();
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
 
-  VisibilityContext visibility_context{scene, world, options, lights, pixels};
+  VisibilityContext visibility_context{scene, world, options, lights, pixels, {}, {}, {}};
   const bool optimal = stochastic && options.probabilities == ProbabilityMode::optimal;
   if (optimal) visibility_context.optimal = scene_optimal_probabilities(visibility_context);
+  SceneCorrectionCosts correction_costs;
+  if (stochastic && options.probabilities == ProbabilityMode::learned && options.estimator == StochasticEstimator::control_variate &&
+      options.integrator == IntegratorKind::direct) {
+    correction_costs = scene_correction_costs(visibility_context);
+    visibility_context.correction_costs = correction_costs.costs;
+    visibility_context.correction_priors = correction_costs.priors;
+  }
   const std::unique_ptr<Visibility> visibility = make_visibility(visibility_context);
   const IntegratorContext integrator_context{scene, world, options, lights};
   const std::unique_ptr<Integrator> integrator = make_integrator(integrator_context);
@@ -225,6 +309,22 @@ RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOp
       const Probabilities& p = visibility_context.optimal[static_cast<std::size_t>(kind)];
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
+  if (!correction_costs.costs.empty()) {
+    nlohmann::json instances = nlohmann::json::array();
+    for (std::size_t i = 0; i < correction_costs.work.size(); ++i) {
+      const SegmentQueryCosts& w = correction_costs.work[i];
+      instances.push_back({{"instance", i},
+                           {"mesh", scene.instances[i].mesh},
+                           {"camera_work", w.camera},
+                           {"exact_work", w.exact},
+                           {"proxy_work", w.proxy},
+                           {"correction_work", w.correction},
+                           {"proxy_blocks_share", correction_costs.priors[i].share[1]},
+                           {"wrong_when_letting_through", correction_costs.priors[i].disagreeing[0]},
+                           {"wrong_when_blocking", correction_costs.priors[i].disagreeing[1]}});
+    }
+    result.stats.learned_costs = {{"noise_per_segment", correction_costs.noise}, {"instances", instances}};
+  }
   result.stats.passes = passes;
   result.stats.counted = counting;
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

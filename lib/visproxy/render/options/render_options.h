@@ -28,7 +28,9 @@ enum class IntegratorKind { direct, vpl, lightcuts };
 /// exact: its mesh is traced and its spheres are left out; none: all its spheres count.
 enum class SelfShadow { heuristic, exact, none };
 /// equal; adaptive: from K probe rays per shading point (or per pixel, probe_passes);
-/// learned (control variate only): from the corrections each pixel traced in earlier samples;
+/// learned (control variate only): from the corrections each pixel traced in earlier samples
+/// (with direct light, weighed against the modelled costs and the render's noise found
+/// before the render, and traced exactly where the proxy does not pay: learned_choice());
 /// optimal (eq. 8 only): one set for the whole image, eq. 8's optimum for the ray types of
 /// the scene's own shadow segments, traced against proxies and meshes before the render
 /// (the probabilities `visproxy measure --scene` finds and `report` predicts eq. 8 with).

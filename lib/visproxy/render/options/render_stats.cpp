@@ -10,6 +10,7 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
       probe_rays += o.probe_rays;
   for (int i = 0; i < 3; ++i) eq8.terms[i] += o.eq8.terms[i];
   control_variate.after_miss += o.control_variate.after_miss, control_variate.after_hit += o.control_variate.after_hit;
+  control_variate.traced_exactly += o.control_variate.traced_exactly, control_variate.explored += o.control_variate.explored;
   bounds.unoccluded += o.bounds.unoccluded, bounds.occluded += o.bounds.occluded, bounds.traced += o.bounds.traced;
   bounds.shafts_culled += o.bounds.shafts_culled;
   disks.tests += o.disks.tests, disks.clusters += o.disks.clusters;
@@ -30,12 +31,16 @@ nlohmann::json RenderStats::to_json() const {
           {"exact_tests_per_shadow_ray", static_cast<double>(exact_tests) / rays},
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
           {"optimal_probabilities", optimal_probabilities},
+          {"learned_costs", learned_costs},
           {"stochastic_terms",
            {{"a_proxy_only", eq8.terms[0]},
             {"b_mesh_if_proxy_hit", eq8.terms[1]},
             {"c_mesh_if_proxy_missed", eq8.terms[2]}}},
           {"control_variate_corrections",
-           {{"after_proxy_missed", control_variate.after_miss}, {"after_proxy_hit", control_variate.after_hit}}},
+           {{"after_proxy_missed", control_variate.after_miss},
+            {"after_proxy_hit", control_variate.after_hit},
+            {"traced_exactly", control_variate.traced_exactly},
+            {"explored", control_variate.explored}}},
           {"bounds",
            {{"unoccluded_by_outside_proxies", bounds.unoccluded},
             {"occluded_by_inside_proxies", bounds.occluded},

@@ -23,6 +23,9 @@ struct RenderStats {
   } eq8;                                 ///< stochastic, eq. 8
   struct ControlVariate {
     std::uint64_t after_miss = 0, after_hit = 0;  ///< exact corrections traced after the proxy missed / was hit
+    /// learned, direct light: segments traced exactly because the pixel's evidence said the
+    /// proxy would not pay there, and of those, the ones that also traced the proxy to keep learning
+    std::uint64_t traced_exactly = 0, explored = 0;
   } control_variate;                              ///< stochastic, the control variate
   struct Bounds {
     std::uint64_t unoccluded = 0, occluded = 0, traced = 0;
@@ -40,6 +43,10 @@ struct RenderStats {
   /// ProbabilityMode::optimal: the probabilities used per form of the rest of the scene
   /// ({"outside": [p1, p2, p3], "inside": ..., "general": ...}); null otherwise.
   nlohmann::json optimal_probabilities;
+  /// ProbabilityMode::learned with the control variate and direct light: what the learned
+  /// choice weighed, modelled before the render (render/world/query_costs.h): the exact
+  /// render's noise per segment and, per instance, a segment's modelled work; null otherwise.
+  nlohmann::json learned_costs;
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries

@@ -40,7 +40,9 @@ class ControlVariatePoint final : public PointVisibility {
   explicit ControlVariatePoint(ControlVariateVisibility& shared) : shared_(shared) {}
   void begin(const ShadingPoint& point) override;
   double to_light(const Vertex& end) override {
-    return disks_in_use_ ? disk_answer(end, connection_corrections()) : answer(end, light_corrections());
+    if (disks_in_use_) return disk_answer(end, connection_corrections());
+    const CorrectionProbabilities& q = light_corrections();
+    return trace_exactly_ ? exact_answer(end) : answer(end, q);
   }
   double connection(const Vertex& end) override {
     return disks_in_use_ ? disk_answer(end, connection_corrections()) : answer(end, connection_corrections());
@@ -49,6 +51,11 @@ class ControlVariatePoint final : public PointVisibility {
 
  private:
   double answer(const Vertex& end, const CorrectionProbabilities& q);
+  // Where the learned choice says the proxy does not pay: the meshes alone, as exact
+  // visibility traces them; while the pixel has little evidence and evidence could make the
+  // proxy pay, one segment in kExploreOneIn traces proxy and meshes both (an exact answer
+  // too) to keep learning.
+  double exact_answer(const Vertex& end);
   // With occluder disks as V': the exactly traced part first, then the disks, corrected by
   // the meshes of the instances the disks stand for.
   double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
@@ -73,6 +80,10 @@ class ControlVariatePoint final : public PointVisibility {
   ProxyKind kind_ = ProxyKind::general;
   CorrectionProbabilities corrections_, connection_corrections_;
   bool corrections_stale_ = false, connection_corrections_stale_ = false;  // learned: evidence added since computed
+  bool trace_exactly_ = false;  // learned with costs: light segments traced exactly (light_corrections())
+  bool explore_ = false;        // and some of them explored (the proxy could pay)
+  static constexpr int kExploreOneIn = 8;
+  static constexpr std::uint64_t kExploreUntil = 16;  // proxy answers the pixel has seen
 };
 
 class ControlVariateVisibility final : public Visibility {
@@ -81,7 +92,9 @@ class ControlVariateVisibility final : public Visibility {
       : context_(context),
         options_{.scale = context.options.correction_scale, .floor = context.options.probability_floor},
         pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0),
-        pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0) {
+        pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0),
+        costs_(context.correction_costs),
+        priors_(context.correction_priors) {
     kinds_ = stochastic_kinds(context);
     for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
       disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
@@ -96,6 +109,8 @@ class ControlVariateVisibility final : public Visibility {
   std::vector<ProxyKind> kinds_;
   std::vector<RayTypeCounts> pixel_probes_;        // adaptive with probe_passes > 0
   std::vector<CorrectionEvidence> pixel_evidence_;  // learned: what each pixel's corrections showed so far
+  std::vector<CorrectionCosts> costs_;              // learned, direct light: per instance (learned_choice)
+  std::vector<CorrectionPrior> priors_;             // and what each instance's proxy showed before the render
   bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
   std::optional<OccluderDiskIndex> disk_index_;
 };
@@ -115,6 +130,7 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   }
   // learned: computed when first asked (an integrator asks for one of the two kinds of segment).
   corrections_stale_ = connection_corrections_stale_ = options.probabilities == ProbabilityMode::learned;
+  trace_exactly_ = explore_ = false;
   disks_in_use_ = shared_.disks_;
   if (!disks_in_use_) return;
   // Traced exactly: the own instance when splitting, and every instance without a sphere
@@ -199,10 +215,41 @@ void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
 
 const CorrectionProbabilities& ControlVariatePoint::light_corrections() {
   if (corrections_stale_) {
-    corrections_ = correction_probabilities(kind_, shared_.pixel_evidence_[point_.pixel], shared_.options_);
+    const CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
+    if (shared_.costs_.empty()) {
+      corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
+    } else {
+      const LearnedChoice choice =
+          learned_choice(kind_, evidence, shared_.costs_[static_cast<std::size_t>(point_.hit->instance)], shared_.options_,
+                         shared_.priors_[static_cast<std::size_t>(point_.hit->instance)]);
+      corrections_ = choice.q;
+      trace_exactly_ = choice.trace_exactly;
+      explore_ = choice.can_pay;
+    }
     corrections_stale_ = false;
   }
   return corrections_;
+}
+
+double ControlVariatePoint::exact_answer(const Vertex& end) {
+  const RenderWorld& world = shared_.context_.world;
+  RenderStats& stats = *point_.stats;
+  CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
+  // Drawn whether or not it explores, as answer() draws one uniform per segment.
+  const double u = point_.choices->uniform();
+  ++stats.control_variate.traced_exactly;
+  *point_.p1_count += 1;  // the proxy alone: never
+  if (!(explore_ && evidence.answered[0] + evidence.answered[1] < kExploreUntil && u * kExploreOneIn < 1)) {
+    ++stats.exact_tests;
+    return world.mesh_blocks(point_.position, end) ? 0 : 1;
+  }
+  ++stats.control_variate.explored;
+  const ControlVariateSample sample =
+      control_variate_visibility(world, point_.position, end, point_.hit->instance, {.after_miss = 1, .after_hit = 1}, 0.0,
+                                 shared_.context_.options.split, stats, point_.hit->own_mesh_clear_of(point_.position, end));
+  if (sample.proxy_traced) evidence.answer(sample.proxy_blocked);
+  if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);
+  return sample.visibility;
 }
 
 const CorrectionProbabilities& ControlVariatePoint::connection_corrections() {
@@ -247,6 +294,10 @@ double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilit
   if (sample.proxy_traced) {
     *point_.p1_sum += 1 - sample.trace_probability;
     *point_.p1_count += 1;
+    if (!shared_.pixel_evidence_.empty()) {
+      shared_.pixel_evidence_[point_.pixel].answer(sample.proxy_blocked);
+      corrections_stale_ = connection_corrections_stale_ = true;
+    }
   }
   if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);
   return sample.visibility;

@@ -73,6 +73,13 @@ struct VisibilityContext {
   /// ProbabilityMode::optimal: eq. 8's probabilities per form of the rest of the scene
   /// (indexed by ProxyKind: outside, inside, general), found before the render.
   std::array<Probabilities, 3> optimal = {};
+  /// ProbabilityMode::learned with the control variate and direct light: per instance, what
+  /// a segment from its points costs and the render's noise without proxies, modelled before
+  /// the render (learned_choice()); empty otherwise (the cost-blind rule).
+  std::vector<CorrectionCosts> correction_costs;
+  /// With correction_costs: per instance, what its proxy showed on segments traced before the
+  /// render (the pixels' evidence starts from it).
+  std::vector<CorrectionPrior> correction_priors;
 };
 
 std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);

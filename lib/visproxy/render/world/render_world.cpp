@@ -166,6 +166,7 @@ struct RenderWorld::Impl {
   TriangleMesh lights_world;          // every light triangle, world space
   std::vector<ProxyKind> stochastic_kinds;  // per instance; outside for exact (mesh itself)
   std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
+  std::vector<InstanceWork> work;  // per instance
   std::size_t instance_count = 0;
   bool has_inside = false;
   std::vector<BoundingBox> instance_bounds;
@@ -657,6 +658,18 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
       split_parts.push_back({mesh_scene(instance.mesh), mesh_scene(instance.mesh), nullptr, object_to_world});
     }
     w.is_exact.push_back(!p.stochastic.has_value());
+    {
+      auto levels = [](std::size_t primitives) { return std::log2(2.0 + static_cast<double>(primitives)); };
+      InstanceWork work{.mesh = levels(mesh.mesh.triangles.size())};
+      work.proxy = work.mesh;
+      if (p.stochastic) {
+        const PreparedProxy& prepared = prepared_for(instance.mesh, *p.stochastic);
+        work.proxy = levels(prepared.polytope              ? prepared.polytope->planes().size()
+                            : !prepared.spheres.empty() ? prepared.spheres.size()
+                                                        : prepared.mesh.triangles.size());
+      }
+      w.work.push_back(work);
+    }
     std::vector<Sphere> occluders;
     if (p.stochastic)
       for (const Sphere& ball : p.stochastic->spheres) occluders.push_back({instance.transform * ball.center, ball.radius * scales(0)});
@@ -948,6 +961,8 @@ const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return 
 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }
+
+const RenderWorld::InstanceWork& RenderWorld::instance_work(std::size_t instance) const { return impl_->work.at(instance); }
 
 bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
 

@@ -228,6 +228,13 @@ class RenderWorld {
   /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
+  /// The modelled work (render/world/query_costs.h) of a segment that enters the
+  /// instance's world box: log2(2 + n) for the n primitives of its mesh, and of its
+  /// stochastic proxy (triangles, balls, or a clipped solid's planes; its mesh when it has none).
+  struct InstanceWork {
+    double mesh = 0, proxy = 0;
+  };
+  const InstanceWork& instance_work(std::size_t instance) const;
   /// The instances i for which meets(instance_bounds(i), instance_sphere(i)) holds, in
   /// increasing order, found through a tree over the instances' bounds: `meets` must be
   /// monotone (false for a box and a ball means false for every box and ball they hold), as
