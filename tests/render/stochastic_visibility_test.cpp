@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
@@ -400,10 +401,13 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
 // The learned control variate weighs its proxy's cost and noise against the mesh's, per
 // pixel (learned_choice with the render's modelled costs): a ball proxy of a 20 480-triangle
 // ball is cheap and rarely wrong, and answers most segments (its pixels need not explore);
-// the box of a coarse ball is wrong on a third of the segments through it and gives way to
-// exact tracing in most pixels, after some exploring; a proxy as costly as the ball's own mesh (the ball itself,
-// moved by 2 % of its radius) can never pay, so no pixel explores it at all. Either way the
-// image stays within the paired noise of exact's (the gate only ever swaps in exact answers).
+// a ball of 1.3 times its radius (320 triangles) is cheap too but blocks two fifths of the
+// segments through it wrongly, and gives way to exact tracing in most pixels, after some
+// exploring; a proxy as costly as the ball's own mesh (the coarse ball itself, moved by
+// 2 % of its radius) and the coarse ball's box (a clipped solid, tested outside Embree)
+// can never pay, so no pixel explores them at all. Either way the image stays within the
+// paired noise of exact's (the gate only ever swaps in exact answers), and is the same
+// rendered on one thread (the fine ball's image holds pixels of both kinds).
 TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNotPay) {
   struct Case {
     InstanceProxy proxy;
@@ -413,12 +417,13 @@ TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNo
     bool traces_proxy;
   };
   const std::vector<Case> cases = {
-      {{ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5, 0.0, 0.3, std::nullopt, true},
-      {{ProxyKind::outside, "aabb", box({-1, -1, 1}, {1, 1, 3}), {}, true}, 3, 0.6, 1.0, true, true},
+      {{ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5, 0.02, 0.3, std::nullopt, true},
+      {{ProxyKind::general, "large ball", sphere_set_mesh({{{0, 0, 2}, 1.3}}, 2), {}}, 5, 0.6, 1.0, true, true},
+      {{ProxyKind::outside, "aabb", box({-1, -1, 1}, {1, 1, 3}), {}, true}, 3, 1.0, 1.0, false, false},
       {{ProxyKind::general, "moved ball", sphere_set_mesh({{{0.02, 0, 2}, 1.0}}, 3), {}}, 3, 1.0, 1.0, false, false}};
   for (const Case& c : cases) {
     TwoInstances s = penumbra_view(c.proxy, c.ball_levels);
-    s.scene.camera.width = s.scene.camera.height = 16;
+    s.scene.camera.width = s.scene.camera.height = 48;  // 9 tiles
     const RenderWorld world(s.scene, s.proxies);
     const RenderOptions exact{.spp = 32, .shadow_rays = 4, .seed = 77};
     RenderOptions learned = exact;
@@ -427,6 +432,13 @@ TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNo
     learned.probabilities = ProbabilityMode::learned;
     const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, learned);
     const RenderStats& stats = b.stats;
+    {
+      // The choices, evidence and costs are the pixels' own: one thread gives the same image.
+      const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+      const RenderResult one = render(s.scene, world, learned);
+      EXPECT_EQ(one.image.pixels, b.image.pixels) << c.proxy.spec;
+      EXPECT_EQ(one.stats.control_variate.traced_exactly, stats.control_variate.traced_exactly) << c.proxy.spec;
+    }
     const double share = static_cast<double>(stats.control_variate.traced_exactly) / static_cast<double>(stats.shadow_rays);
     std::printf("%-12s segments traced exactly %.3f, explored %.4f, corrections per segment %.3f\n", c.proxy.spec.c_str(), share,
                 static_cast<double>(stats.control_variate.explored) / static_cast<double>(stats.shadow_rays),

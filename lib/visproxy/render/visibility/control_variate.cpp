@@ -7,6 +7,8 @@
 
 #include "visproxy/render/visibility/occluder_disks.h"
 #include "visproxy/render/visibility/visibility.h"
+#include "visproxy/render/world/query_costs.h"
+#include "visproxy/render/world/sampling.h"
 
 namespace visproxy {
 
@@ -41,6 +43,7 @@ class ControlVariatePoint final : public PointVisibility {
   void begin(const ShadingPoint& point) override;
   double to_light(const Vertex& end) override {
     if (disks_in_use_) return disk_answer(end, connection_corrections());
+    model_costs(end);
     const CorrectionProbabilities& q = light_corrections();
     return trace_exactly_ ? exact_answer(end) : answer(end, q);
   }
@@ -60,6 +63,11 @@ class ControlVariatePoint final : public PointVisibility {
   // the meshes of the instances the disks stand for.
   double disk_answer(const Vertex& end, const CorrectionProbabilities& q);
   void learn(bool proxy_blocked, bool mesh_blocked);
+  void evidence_changed();  // learned: the pixel's corrections and cached choice are recomputed when next asked
+  // Learned with costs: the modelled costs of the pixel's first kCostSegments light
+  // segments from one instance, which its choice weighs in place of the instance's average.
+  void model_costs(const Vertex& end);
+  CorrectionCosts pixel_costs(int instance) const;
   // The probabilities for segments to a light (the kind of the rest of the scene) and for
   // other segments (general), brought up to date with the pixel's evidence when it grew.
   const CorrectionProbabilities& light_corrections();
@@ -94,7 +102,10 @@ class ControlVariateVisibility final : public Visibility {
         pixel_probes_(context.options.probe_passes > 0 ? context.pixels : 0),
         pixel_evidence_(context.options.probabilities == ProbabilityMode::learned ? context.pixels : 0),
         costs_(context.correction_costs),
-        priors_(context.correction_priors) {
+        priors_(context.correction_priors),
+        pixel_choice_(costs_.empty() ? 0 : context.pixels),
+        pixel_costs_(costs_.empty() ? 0 : context.pixels),
+        camera_(CameraRays(context.scene.camera).origin()) {
     kinds_ = stochastic_kinds(context);
     for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
       disks_ = disks_ || (context.options.integrator == IntegratorKind::vpl && !context.world.occluder_spheres(i).empty());
@@ -111,6 +122,22 @@ class ControlVariateVisibility final : public Visibility {
   std::vector<CorrectionEvidence> pixel_evidence_;  // learned: what each pixel's corrections showed so far
   std::vector<CorrectionCosts> costs_;              // learned, direct light: per instance (learned_choice)
   std::vector<CorrectionPrior> priors_;             // and what each instance's proxy showed before the render
+  // With costs: each pixel's last choice and the instance it was made for (-1: none, or the
+  // pixel's evidence changed since), so that a pixel whose evidence stands still (traced
+  // exactly, not exploring) does not weigh it again at every sample.
+  struct CachedChoice {
+    LearnedChoice choice;
+    int instance = -1;
+  };
+  std::vector<CachedChoice> pixel_choice_;
+  struct PixelCosts {
+    SegmentQueryCosts sum;  // camera: each segment's share
+    int instance = -1;      // the instance the segments start on (the pixel's first)
+    int segments = 0;
+  };
+  static constexpr int kCostSegments = 8;
+  std::vector<PixelCosts> pixel_costs_;
+  Vertex camera_ = Vertex::Zero();
   bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
   std::optional<OccluderDiskIndex> disk_index_;
 };
@@ -210,7 +237,39 @@ void ControlVariatePoint::learn(bool proxy_blocked, bool mesh_blocked) {
   if (shared_.pixel_evidence_.empty()) return;
   CorrectionEvidence& evidence = shared_.pixel_evidence_[point_.pixel];
   evidence.add(proxy_blocked, mesh_blocked);
+  evidence_changed();
+}
+
+void ControlVariatePoint::model_costs(const Vertex& end) {
+  if (shared_.pixel_costs_.empty()) return;
+  ControlVariateVisibility::PixelCosts& c = shared_.pixel_costs_[point_.pixel];
+  const int instance = point_.hit->instance;
+  if (c.segments >= ControlVariateVisibility::kCostSegments || (c.segments > 0 && c.instance != instance)) return;
+  const RenderOptions& options = shared_.context_.options;
+  const SegmentQueryCosts q =
+      segment_query_costs(shared_.context_.world, shared_.camera_, point_.position, end, instance, options.split);
+  c.sum.camera += q.camera / std::max(options.shadow_rays, 1);
+  c.sum.exact += q.exact, c.sum.proxy += q.proxy, c.sum.correction += q.correction;
+  c.instance = instance;
+  ++c.segments;
+  evidence_changed();
+}
+
+// The instance's average from before the render counts as one segment among the pixel's.
+CorrectionCosts ControlVariatePoint::pixel_costs(int instance) const {
+  const CorrectionCosts& average = shared_.costs_[static_cast<std::size_t>(instance)];
+  const ControlVariateVisibility::PixelCosts& c = shared_.pixel_costs_[point_.pixel];
+  if (c.segments == 0 || c.instance != instance) return average;
+  const double n = c.segments + 1.0;
+  return {.base = (c.sum.camera + c.sum.proxy + average.base) / n,
+          .correction = (c.sum.correction + average.correction) / n,
+          .exact = (c.sum.camera + c.sum.exact + average.exact) / n,
+          .variance = average.variance};
+}
+
+void ControlVariatePoint::evidence_changed() {
   corrections_stale_ = connection_corrections_stale_ = true;
+  if (!shared_.pixel_choice_.empty()) shared_.pixel_choice_[point_.pixel].instance = -1;
 }
 
 const CorrectionProbabilities& ControlVariatePoint::light_corrections() {
@@ -219,9 +278,14 @@ const CorrectionProbabilities& ControlVariatePoint::light_corrections() {
     if (shared_.costs_.empty()) {
       corrections_ = correction_probabilities(kind_, evidence, shared_.options_);
     } else {
-      const LearnedChoice choice =
-          learned_choice(kind_, evidence, shared_.costs_[static_cast<std::size_t>(point_.hit->instance)], shared_.options_,
-                         shared_.priors_[static_cast<std::size_t>(point_.hit->instance)]);
+      ControlVariateVisibility::CachedChoice& cached = shared_.pixel_choice_[point_.pixel];
+      const int instance = point_.hit->instance;
+      if (cached.instance != instance) {
+        cached.choice =
+            learned_choice(kind_, evidence, pixel_costs(instance), shared_.options_, shared_.priors_[static_cast<std::size_t>(instance)]);
+        cached.instance = instance;
+      }
+      const LearnedChoice& choice = cached.choice;
       corrections_ = choice.q;
       trace_exactly_ = choice.trace_exactly;
       explore_ = choice.can_pay;
@@ -247,7 +311,7 @@ double ControlVariatePoint::exact_answer(const Vertex& end) {
   const ControlVariateSample sample =
       control_variate_visibility(world, point_.position, end, point_.hit->instance, {.after_miss = 1, .after_hit = 1}, 0.0,
                                  shared_.context_.options.split, stats, point_.hit->own_mesh_clear_of(point_.position, end));
-  if (sample.proxy_traced) evidence.answer(sample.proxy_blocked);
+  if (sample.proxy_traced) evidence.answer(sample.proxy_blocked), evidence_changed();
   if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);
   return sample.visibility;
 }
@@ -296,7 +360,7 @@ double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilit
     *point_.p1_count += 1;
     if (!shared_.pixel_evidence_.empty()) {
       shared_.pixel_evidence_[point_.pixel].answer(sample.proxy_blocked);
-      corrections_stale_ = connection_corrections_stale_ = true;
+      evidence_changed();
     }
   }
   if (sample.mesh_traced) learn(sample.proxy_blocked, sample.mesh_blocked);

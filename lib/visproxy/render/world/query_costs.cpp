@@ -1,5 +1,6 @@
 #include "visproxy/render/world/query_costs.h"
 
+#include <cmath>
 #include <vector>
 
 #include "visproxy/render/world/box_tree.h"
@@ -13,7 +14,14 @@ void instances_met(const RenderWorld& world, const Vertex& from, const Vertex& t
   world.instances_where([&](const BoundingBox& box, const Sphere&) { return segment_meets_box(from, to, box); }, out);
 }
 
+double levels(std::size_t primitives) { return std::log2(2.0 + static_cast<double>(primitives)); }
+
 }  // namespace
+
+InstanceWork instance_work(const RenderWorld& world, std::size_t instance) {
+  const RenderWorld::InstancePrimitives& p = world.instance_primitives(instance);
+  return {.mesh = levels(p.mesh), .proxy = levels(p.proxy) + (p.proxy_triangles ? 0.0 : kOwnTestWork)};
+}
 
 SegmentQueryCosts segment_query_costs(const RenderWorld& world, const Vertex& camera, const Vertex& from, const Vertex& to, int own,
                                       bool split) {
@@ -21,11 +29,11 @@ SegmentQueryCosts segment_query_costs(const RenderWorld& world, const Vertex& ca
   SegmentQueryCosts costs;
   costs.camera = kQueryWork + kShadingWork;
   instances_met(world, camera, from, met);
-  for (const std::size_t i : met) costs.camera += world.instance_work(i).mesh;
+  for (const std::size_t i : met) costs.camera += instance_work(world, i).mesh;
   costs.exact = costs.proxy = costs.correction = kQueryWork;
   instances_met(world, from, to, met);
   for (const std::size_t i : met) {
-    const RenderWorld::InstanceWork& work = world.instance_work(i);
+    const InstanceWork work = instance_work(world, i);
     costs.exact += work.mesh;
     if (split && static_cast<int>(i) == own) {
       costs.proxy += work.mesh;

@@ -5,16 +5,30 @@
 //
 // A query pays kQueryWork, and for each instance whose world box the segment meets,
 // log2(2 + n) for the n primitives (triangles, balls, clipping planes) of the geometry it
-// meets there: the depth of a BVH over them, which a ray that enters the box descends.
-// A camera sample pays for its camera ray the same way, and kShadingWork for shading.
-// The unit is about one BVH level.
+// meets there: the depth of a BVH over them, which a ray that enters the box descends;
+// balls and clipped solids, which visproxy's own code tests outside Embree's SIMD kernels,
+// add kOwnTestWork. A camera sample pays for its camera ray the same way, and kShadingWork
+// for shading. The unit is about one BVH level.
+//
+// The constants were fit to renders of the prediction scenes (apps/bench/README.md): exact
+// renders at 1 and 4 shadow rays per sample put a segment at 0.31-0.69 of the rest of a
+// sample (the model: 0.59-0.68), and the oriented boxes of cow-field, which `--count`
+// shows doing 0.6x the mesh's traversal work, cost as much time as the meshes.
 
 #include "visproxy/render/world/render_world.h"
 
 namespace visproxy {
 
+/// The modelled work of a segment that enters an instance's box: of its mesh, and of its
+/// stochastic proxy.
+struct InstanceWork {
+  double mesh = 0, proxy = 0;
+};
+InstanceWork instance_work(const RenderWorld& world, std::size_t instance);
+
 inline constexpr double kQueryWork = 2;    ///< a query's own work: the ray's setup and the top level
 inline constexpr double kShadingWork = 10;  ///< a camera sample's shading and light sampling
+inline constexpr double kOwnTestWork = 8;   ///< balls and clipped solids: tested outside Embree
 
 /// The modelled work of one shadow segment from a point on instance `own`.
 struct SegmentQueryCosts {

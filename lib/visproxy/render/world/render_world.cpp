@@ -166,7 +166,7 @@ struct RenderWorld::Impl {
   TriangleMesh lights_world;          // every light triangle, world space
   std::vector<ProxyKind> stochastic_kinds;  // per instance; outside for exact (mesh itself)
   std::vector<bool> is_exact;  // per instance: no stochastic proxy (traced exactly)
-  std::vector<InstanceWork> work;  // per instance
+  std::vector<InstancePrimitives> primitives;  // per instance
   std::size_t instance_count = 0;
   bool has_inside = false;
   std::vector<BoundingBox> instance_bounds;
@@ -659,16 +659,15 @@ RenderWorld::RenderWorld(const Scene& scene, const std::vector<MeshProxies>& pro
     }
     w.is_exact.push_back(!p.stochastic.has_value());
     {
-      auto levels = [](std::size_t primitives) { return std::log2(2.0 + static_cast<double>(primitives)); };
-      InstanceWork work{.mesh = levels(mesh.mesh.triangles.size())};
-      work.proxy = work.mesh;
+      InstancePrimitives primitives{.mesh = mesh.mesh.triangles.size(), .proxy = mesh.mesh.triangles.size()};
       if (p.stochastic) {
         const PreparedProxy& prepared = prepared_for(instance.mesh, *p.stochastic);
-        work.proxy = levels(prepared.polytope              ? prepared.polytope->planes().size()
-                            : !prepared.spheres.empty() ? prepared.spheres.size()
-                                                        : prepared.mesh.triangles.size());
+        primitives.proxy = prepared.polytope          ? prepared.polytope->planes().size()
+                           : !prepared.spheres.empty() ? prepared.spheres.size()
+                                                       : prepared.mesh.triangles.size();
+        primitives.proxy_triangles = !prepared.polytope && prepared.spheres.empty();
       }
-      w.work.push_back(work);
+      w.primitives.push_back(primitives);
     }
     std::vector<Sphere> occluders;
     if (p.stochastic)
@@ -962,7 +961,9 @@ const Sphere& RenderWorld::instance_sphere(std::size_t instance) const { return 
 TraversalCounts& RenderWorld::thread_counts() { return g_thread_counts; }
 bool RenderWorld::counting() const { return impl_->counting; }
 
-const RenderWorld::InstanceWork& RenderWorld::instance_work(std::size_t instance) const { return impl_->work.at(instance); }
+const RenderWorld::InstancePrimitives& RenderWorld::instance_primitives(std::size_t instance) const {
+  return impl_->primitives.at(instance);
+}
 
 bool RenderWorld::has_inside_proxies() const { return impl_->has_inside; }
 

@@ -228,13 +228,15 @@ class RenderWorld {
   /// rounding bound of Embree's tests.
   const BoundingBox& instance_bounds(std::size_t instance) const;
   const Sphere& instance_sphere(std::size_t instance) const;
-  /// The modelled work (render/world/query_costs.h) of a segment that enters the
-  /// instance's world box: log2(2 + n) for the n primitives of its mesh, and of its
-  /// stochastic proxy (triangles, balls, or a clipped solid's planes; its mesh when it has none).
-  struct InstanceWork {
-    double mesh = 0, proxy = 0;
+  /// What a segment that enters the instance's world box may test (render/world/query_costs.h
+  /// models its cost): the mesh's triangles, and the stochastic proxy's primitives
+  /// (triangles Embree traces, or balls and a clipped solid's planes, which visproxy's own
+  /// code tests; the mesh when it has none).
+  struct InstancePrimitives {
+    std::size_t mesh = 0, proxy = 0;
+    bool proxy_triangles = true;
   };
-  const InstanceWork& instance_work(std::size_t instance) const;
+  const InstancePrimitives& instance_primitives(std::size_t instance) const;
   /// The instances i for which meets(instance_bounds(i), instance_sphere(i)) holds, in
   /// increasing order, found through a tree over the instances' bounds: `meets` must be
   /// monotone (false for a box and a ball means false for every box and ball they hold), as
