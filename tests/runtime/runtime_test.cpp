@@ -297,5 +297,65 @@ TEST_F(Runtime, EstimatesAreUnbiasedWhereTheClaimCoversASegmentAndWhereItDoesNot
   EXPECT_NEAR(mean, 0.0, 1e-12);
 }
 
+// The control variate weighing your costs: where the proxy does not pay (a proxy query as
+// costly as the exact one), every segment gets the exact answer, for every u; the proxy
+// is traced only to explore, for u < 1/8 while the evidence is short, and never when no
+// evidence could make it pay. Where it pays (a cheap proxy that has never been wrong), q
+// drops below 1 and the estimate stays unbiased over u. Costs it cannot use (NaN) give the
+// cost-blind rule.
+TEST_F(Runtime, ControlVariateWithCostsTracesExactlyWhereTheProxyDoesNotPay) {
+  const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
+  const PlacedProxy placed = hull.place();
+  const ShadowEstimator estimator(placed);
+  const BoundingBox box = bounding_box(knot_);
+  const Vertex centre = 0.5 * (box.min + box.max);
+  const Vertex far_a = centre + Vertex(10, 0, 0) * box.diagonal(), far_b = centre + Vertex(0, 10, 0) * box.diagonal();
+  ASSERT_EQ(estimator.form(far_a, far_b), ProxyKind::outside);
+  const CorrectionOptions options{.scale = 2, .floor = 0.05};
+  for (const bool mesh_hit : {false, true}) {
+    int proxy_calls = 0, mesh_calls = 0;
+    auto proxy = [&](const Vertex&, const Vertex&) { return ++proxy_calls, true; };
+    auto mesh = [&](const Vertex&, const Vertex&) { return ++mesh_calls, mesh_hit; };
+    const double exact = mesh_hit ? 0.0 : 1.0;
+    // The proxy costs what the mesh does: never pays, never explored.
+    LearnedCorrections costly(options, {.base = 10, .correction = 10, .exact = 10, .variance = 0.2});
+    EXPECT_TRUE(costly.choice(ProxyKind::outside).trace_exactly);
+    for (const double u : {0.01, 0.5, 0.99}) EXPECT_EQ(estimator.control_variate(far_a, far_b, u, costly, proxy, mesh), exact);
+    EXPECT_EQ(proxy_calls, 0);
+    EXPECT_EQ(mesh_calls, 3);
+    // Cheap, but said to be wrong on most of its hits: gated, and explored for u < 1/8.
+    LearnedCorrections wrong(options, {.base = 2, .correction = 10, .exact = 10, .variance = 0.01},
+                             {.share = {0.2, 0.8}, .disagreeing = {0.001, 0.9}, .weight = 16});
+    ASSERT_TRUE(wrong.choice(ProxyKind::outside).trace_exactly);
+    proxy_calls = 0;
+    EXPECT_EQ(estimator.control_variate(far_a, far_b, 0.5, wrong, proxy, mesh), exact);
+    EXPECT_EQ(proxy_calls, 0);
+    EXPECT_EQ(estimator.control_variate(far_a, far_b, 0.1, wrong, proxy, mesh), exact);
+    EXPECT_EQ(proxy_calls, 1);
+    EXPECT_EQ(wrong.evidence().answered[1], 1u);
+    EXPECT_EQ(wrong.evidence().seen[1], 1u);
+  }
+  // Cheap and never wrong: the control variate, q below 1 after a hit, unbiased over u.
+  LearnedCorrections cheap(options, {.base = 2, .correction = 10, .exact = 10, .variance = 0.2},
+                           {.share = {0.5, 0.5}, .disagreeing = {0.001, 0.001}, .weight = 16});
+  const LearnedChoice choice = cheap.choice(ProxyKind::outside);
+  ASSERT_FALSE(choice.trace_exactly);
+  ASSERT_LT(choice.q.after_hit, 1.0);
+  for (const bool mesh_hit : {false, true}) {
+    auto proxy = [](const Vertex&, const Vertex&) { return true; };
+    auto mesh = [&](const Vertex&, const Vertex&) { return mesh_hit; };
+    const double mean = mean_over_u({choice.q.after_hit, 1.0}, [&](double u) {
+      LearnedCorrections copy = cheap;
+      return estimator.control_variate(far_a, far_b, u, copy, proxy, mesh);
+    });
+    EXPECT_NEAR(mean, mesh_hit ? 0.0 : 1.0, 1e-12);
+  }
+  // Unusable costs: the cost-blind probabilities.
+  LearnedCorrections blind(options, {.base = std::nan(""), .correction = 1, .exact = 1, .variance = 1});
+  EXPECT_FALSE(blind.choice(ProxyKind::outside).trace_exactly);
+  EXPECT_EQ(blind.probabilities(ProxyKind::outside).after_hit,
+            correction_probabilities(ProxyKind::outside, blind.evidence(), options).after_hit);
+}
+
 }  // namespace
 }  // namespace visproxy

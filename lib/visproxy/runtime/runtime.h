@@ -146,16 +146,40 @@ class PlacedProxy {
 /// Evidence for the control variate's learned probabilities: one per pixel (or region) of
 /// yours. A segment's probabilities depend only on earlier segments' corrections, which
 /// keeps every estimate unbiased (Russian roulette with a probability fixed before the draw).
+///
+/// Given your renderer's costs (what a segment costs with the proxy query, a correction, and
+/// with the exact query, each with its share of the camera ray and shading, in any one unit,
+/// and your exact render's noise per segment: CorrectionCosts), it also weighs the control
+/// variate's variance x cost against exact tracing's (learned_choice()), and
+/// ShadowEstimator::control_variate traces your exact geometry alone where the proxy does
+/// not pay. `prior`: what you know of the proxy before any evidence (its rates on segments
+/// you traced both ways).
 class LearnedCorrections {
  public:
   explicit LearnedCorrections(CorrectionOptions options = {}) : options_(options) {}
-  CorrectionProbabilities probabilities(ProxyKind kind) const { return correction_probabilities(kind, evidence_, options_); }
+  LearnedCorrections(CorrectionOptions options, const CorrectionCosts& costs, const CorrectionPrior& prior = {})
+      : options_(options), costs_(costs), prior_(prior) {}
+  CorrectionProbabilities probabilities(ProxyKind kind) const {
+    return costs_ ? choice(kind).q : correction_probabilities(kind, evidence_, options_);
+  }
+  /// With costs, the cost-aware choice; without, the cost-blind probabilities, never exact.
+  LearnedChoice choice(ProxyKind kind) const {
+    if (costs_) return learned_choice(kind, evidence_, *costs_, options_, prior_);
+    LearnedChoice blind;
+    blind.q = correction_probabilities(kind, evidence_, options_);
+    return blind;
+  }
+  bool weighs_costs() const { return costs_.has_value(); }
   void record(bool proxy_blocked, bool mesh_blocked) { evidence_.add(proxy_blocked, mesh_blocked); }
+  /// A segment the proxy answered (traced or not): the share of each answer.
+  void answered(bool proxy_blocked) { evidence_.answer(proxy_blocked); }
   const CorrectionEvidence& evidence() const { return evidence_; }
 
  private:
   CorrectionOptions options_;
   CorrectionEvidence evidence_;
+  std::optional<CorrectionCosts> costs_;
+  CorrectionPrior prior_;
 };
 
 /// Stochastic visibility of shadow segments with a placed proxy (Billen et al. eq. 8, or
@@ -192,12 +216,26 @@ class ShadowEstimator {
   }
 
   /// The control variate: V' + (V - V') [u < q] / q, with q chosen by the proxy's answer
-  /// from `learned` (which then records the correction when one was traced).
+  /// from `learned` (which then records the correction when one was traced). When `learned`
+  /// weighs costs and says the proxy does not pay, the exact answer: your exact geometry
+  /// alone, or, while the evidence is short (fewer than 16 answers) and the proxy could pay,
+  /// for u < 1/8 both, to keep learning.
   template <class ProxyBlocked, class MeshBlocked>
   double control_variate(const Vertex& from, const Vertex& to, double u, LearnedCorrections& learned,
                          ProxyBlocked&& proxy_blocked, MeshBlocked&& mesh_blocked) const {
-    const CorrectionProbabilities q = learned.probabilities(form(from, to));
+    const LearnedChoice choice = learned.choice(form(from, to));
+    const CorrectionProbabilities& q = choice.q;
+    if (choice.trace_exactly) {
+      const CorrectionEvidence& e = learned.evidence();
+      const bool explore = choice.can_pay && e.answered[0] + e.answered[1] < 16 && u * 8 < 1;
+      if (!explore) return mesh_blocked(from, to) ? 0.0 : 1.0;
+      const bool proxy_hit = proxy_blocked(from, to), mesh_hit = mesh_blocked(from, to);
+      learned.answered(proxy_hit);
+      learned.record(proxy_hit, mesh_hit);
+      return mesh_hit ? 0.0 : 1.0;
+    }
     const bool proxy_hit = proxy_blocked(from, to);
+    if (learned.weighs_costs()) learned.answered(proxy_hit);
     const double v_proxy = proxy_hit ? 0.0 : 1.0;
     const double chance = proxy_hit ? q.after_hit : q.after_miss;
     if (!(u < chance)) return v_proxy;
