@@ -43,6 +43,7 @@ class ControlVariatePoint final : public PointVisibility {
   void begin(const ShadingPoint& point) override;
   double to_light(const Vertex& end) override {
     if (disks_in_use_) return disk_answer(end, connection_corrections());
+    if (settled()) return settled_answer(end);
     model_costs(end);
     const CorrectionProbabilities& q = light_corrections();
     return trace_exactly_ ? exact_answer(end) : answer(end, q);
@@ -67,6 +68,10 @@ class ControlVariatePoint final : public PointVisibility {
   // Learned with costs: the modelled costs of the pixel's first kCostSegments light
   // segments from one instance, which its choice weighs in place of the instance's average.
   void model_costs(const Vertex& end);
+  // Learned with costs: the pixel traces this instance's segments exactly and has nothing
+  // left to learn (no exploring, its costs modelled): answered touching one int per pixel.
+  bool settled() const;
+  double settled_answer(const Vertex& end);
   CorrectionCosts pixel_costs(int instance) const;
   // The probabilities for segments to a light (the kind of the rest of the scene) and for
   // other segments (general), brought up to date with the pixel's evidence when it grew.
@@ -105,6 +110,7 @@ class ControlVariateVisibility final : public Visibility {
         priors_(context.correction_priors),
         pixel_choice_(costs_.empty() ? 0 : context.pixels),
         pixel_costs_(costs_.empty() ? 0 : context.pixels),
+        pixel_settled_(costs_.empty() ? 0 : context.pixels, -1),
         camera_(CameraRays(context.scene.camera).origin()) {
     kinds_ = stochastic_kinds(context);
     for (std::size_t i = 0; i < context.scene.instances.size(); ++i)
@@ -137,6 +143,7 @@ class ControlVariateVisibility final : public Visibility {
   };
   static constexpr int kCostSegments = 8;
   std::vector<PixelCosts> pixel_costs_;
+  std::vector<int> pixel_settled_;  // the instance whose segments the pixel traces exactly, with nothing to learn (-1: none)
   Vertex camera_ = Vertex::Zero();
   bool disks_ = false;  // the VPL integrator with sphere-set proxies: occluder disks are V'
   std::optional<OccluderDiskIndex> disk_index_;
@@ -269,7 +276,19 @@ CorrectionCosts ControlVariatePoint::pixel_costs(int instance) const {
 
 void ControlVariatePoint::evidence_changed() {
   corrections_stale_ = connection_corrections_stale_ = true;
-  if (!shared_.pixel_choice_.empty()) shared_.pixel_choice_[point_.pixel].instance = -1;
+  if (!shared_.pixel_choice_.empty()) shared_.pixel_choice_[point_.pixel].instance = shared_.pixel_settled_[point_.pixel] = -1;
+}
+
+bool ControlVariatePoint::settled() const {
+  return !shared_.pixel_settled_.empty() && shared_.pixel_settled_[point_.pixel] == point_.hit->instance;
+}
+
+double ControlVariatePoint::settled_answer(const Vertex& end) {
+  RenderStats& stats = *point_.stats;
+  ++stats.control_variate.traced_exactly;
+  ++stats.exact_tests;
+  *point_.p1_count += 1;  // the proxy alone: never
+  return shared_.context_.world.mesh_blocks(point_.position, end) ? 0 : 1;
 }
 
 const CorrectionProbabilities& ControlVariatePoint::light_corrections() {
@@ -303,7 +322,11 @@ double ControlVariatePoint::exact_answer(const Vertex& end) {
   const double u = point_.choices->uniform();
   ++stats.control_variate.traced_exactly;
   *point_.p1_count += 1;  // the proxy alone: never
-  if (!(explore_ && evidence.answered[0] + evidence.answered[1] < kExploreUntil && u * kExploreOneIn < 1)) {
+  const bool learning = explore_ && evidence.answered[0] + evidence.answered[1] < ControlVariatePoint::kExploreUntil;
+  if (!(learning && u * kExploreOneIn < 1)) {
+    const ControlVariateVisibility::PixelCosts& c = shared_.pixel_costs_[point_.pixel];
+    if (!learning && (c.segments >= ControlVariateVisibility::kCostSegments || c.instance != point_.hit->instance))
+      shared_.pixel_settled_[point_.pixel] = point_.hit->instance;
     ++stats.exact_tests;
     return world.mesh_blocks(point_.position, end) ? 0 : 1;
   }
