@@ -381,7 +381,7 @@ double ControlVariatePoint::answer(const Vertex& end, const CorrectionProbabilit
   if (sample.proxy_traced) {
     *point_.p1_sum += 1 - sample.trace_probability;
     *point_.p1_count += 1;
-    if (!shared_.pixel_evidence_.empty()) {
+    if (!shared_.pixel_choice_.empty()) {  // the cost-aware choice weighs the share of each answer
       shared_.pixel_evidence_[point_.pixel].answer(sample.proxy_blocked);
       evidence_changed();
     }
