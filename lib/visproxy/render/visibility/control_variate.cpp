@@ -66,7 +66,8 @@ class ControlVariatePoint final : public PointVisibility {
   void learn(bool proxy_blocked, bool mesh_blocked);
   void evidence_changed();  // learned: the pixel's corrections and cached choice are recomputed when next asked
   // Learned with costs: the modelled costs of the pixel's first kCostSegments light
-  // segments from one instance, which its choice weighs in place of the instance's average.
+  // segments from one instance, which its choice weighs, with the instance's average, once
+  // they are all in.
   void model_costs(const Vertex& end);
   // Learned with costs: the pixel traces this instance's segments exactly and has nothing
   // left to learn (no exploring, its costs modelled): answered touching one int per pixel.
@@ -141,7 +142,7 @@ class ControlVariateVisibility final : public Visibility {
     int instance = -1;      // the instance the segments start on (the pixel's first)
     int segments = 0;
   };
-  static constexpr int kCostSegments = 8;
+  static constexpr int kCostSegments = 4;
   std::vector<PixelCosts> pixel_costs_;
   std::vector<int> pixel_settled_;  // the instance whose segments the pixel traces exactly, with nothing to learn (-1: none)
   Vertex camera_ = Vertex::Zero();
@@ -258,15 +259,15 @@ void ControlVariatePoint::model_costs(const Vertex& end) {
   c.sum.camera += q.camera / std::max(options.shadow_rays, 1);
   c.sum.exact += q.exact, c.sum.proxy += q.proxy, c.sum.correction += q.correction;
   c.instance = instance;
-  ++c.segments;
-  evidence_changed();
+  // The choice is weighed again once the pixel's costs are in (until then, the instance's).
+  if (++c.segments == ControlVariateVisibility::kCostSegments) evidence_changed();
 }
 
 // The instance's average from before the render counts as one segment among the pixel's.
 CorrectionCosts ControlVariatePoint::pixel_costs(int instance) const {
   const CorrectionCosts& average = shared_.costs_[static_cast<std::size_t>(instance)];
   const ControlVariateVisibility::PixelCosts& c = shared_.pixel_costs_[point_.pixel];
-  if (c.segments == 0 || c.instance != instance) return average;
+  if (c.segments < ControlVariateVisibility::kCostSegments || c.instance != instance) return average;
   const double n = c.segments + 1.0;
   return {.base = (c.sum.camera + c.sum.proxy + average.base) / n,
           .correction = (c.sum.correction + average.correction) / n,
