@@ -185,6 +185,16 @@ CorrectionProbabilities correction_probabilities(ProxyKind kind, const Correctio
   return {kind == ProxyKind::outside ? 0.0 : side(0), kind == ProxyKind::inside ? 0.0 : side(1)};
 }
 
+CorrectionPrior CorrectionPrior::from(const CorrectionEvidence& evidence, double weight) {
+  CorrectionPrior prior{.weight = weight};
+  const double answered = static_cast<double>(evidence.answered[0] + evidence.answered[1]);
+  for (std::size_t side = 0; side < 2; ++side) {
+    prior.share[side] = (static_cast<double>(evidence.answered[side]) + 0.5) / (answered + 1);
+    prior.disagreeing[side] = (static_cast<double>(evidence.disagreed[side]) + 0.5) / (static_cast<double>(evidence.seen[side]) + 1);
+  }
+  return prior;
+}
+
 LearnedChoice learned_choice(ProxyKind kind, const CorrectionEvidence& evidence, const CorrectionCosts& costs,
                              const CorrectionOptions& options, const CorrectionPrior& prior) {
   LearnedChoice choice;

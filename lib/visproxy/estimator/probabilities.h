@@ -171,6 +171,8 @@ struct CorrectionPrior {
   std::array<double, 2> share = {0.5, 0.5};
   std::array<double, 2> disagreeing = {0.5, 0.5};
   double weight = 1;
+  /// The rates of `evidence` (Krichevsky-Trofimov estimates: never exactly 0 or 1), worth `weight`.
+  static CorrectionPrior from(const CorrectionEvidence& evidence, double weight);
 };
 
 /// learned_choice() gives the control variate a pixel only where its predicted variance x
@@ -178,6 +180,16 @@ struct CorrectionPrior {
 /// put the shadow queries' share of a sample's time above what renders of the bench scenes
 /// measure (by up to 1.5x on cow-field), so a smaller predicted gain may be none.
 inline constexpr double kLearnedPaysBelow = 0.9;
+
+/// A segment the learned choice traces exactly also traces the proxy, to keep learning,
+/// while the proxy could pay (LearnedChoice::can_pay) and the evidence holds fewer than
+/// kLearnedExploreUntil answers (learned_keeps_exploring()): one such segment in
+/// kLearnedExploreOneIn. Its answer is exact either way.
+inline constexpr std::uint64_t kLearnedExploreUntil = 16;
+inline constexpr int kLearnedExploreOneIn = 8;
+inline bool learned_keeps_exploring(bool can_pay, const CorrectionEvidence& evidence) {
+  return can_pay && evidence.answered[0] + evidence.answered[1] < kLearnedExploreUntil;
+}
 
 /// The learned, cost-aware choice for one segment: whether to trace the mesh exactly, and
 /// if not, the control variate's probabilities.

@@ -179,14 +179,7 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t from = counts[i] > 0 ? i : n;
     const double m = counts[from];
-    const CorrectionEvidence& e = evidence[from];
-    CorrectionPrior prior{.weight = kPriorSegments};
-    const double answered = static_cast<double>(e.answered[0] + e.answered[1]);
-    for (std::size_t side = 0; side < 2; ++side) {  // Krichevsky-Trofimov: never exactly 0 or 1
-      prior.share[side] = (static_cast<double>(e.answered[side]) + 0.5) / (answered + 1);
-      prior.disagreeing[side] = (static_cast<double>(e.disagreed[side]) + 0.5) / (static_cast<double>(e.seen[side]) + 1);
-    }
-    result.priors.push_back(prior);
+    result.priors.push_back(CorrectionPrior::from(evidence[from], kPriorSegments));
     const SegmentQueryCosts w{sums[from].camera / m, sums[from].exact / m, sums[from].proxy / m, sums[from].correction / m};
     result.work.push_back(w);
     result.costs.push_back({.base = w.camera + w.proxy, .correction = w.correction, .exact = w.camera + w.exact, .variance = result.noise});

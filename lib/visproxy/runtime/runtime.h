@@ -226,9 +226,8 @@ class ShadowEstimator {
     const LearnedChoice choice = learned.choice(form(from, to));
     const CorrectionProbabilities& q = choice.q;
     if (choice.trace_exactly) {
-      const CorrectionEvidence& e = learned.evidence();
-      const bool explore = choice.can_pay && e.answered[0] + e.answered[1] < 16 && u * 8 < 1;
-      if (!explore) return mesh_blocked(from, to) ? 0.0 : 1.0;
+      if (!(learned_keeps_exploring(choice.can_pay, learned.evidence()) && u * kLearnedExploreOneIn < 1))
+        return mesh_blocked(from, to) ? 0.0 : 1.0;
       const bool proxy_hit = proxy_blocked(from, to), mesh_hit = mesh_blocked(from, to);
       learned.answered(proxy_hit);
       learned.record(proxy_hit, mesh_hit);

@@ -57,7 +57,7 @@ class ControlVariatePoint final : public PointVisibility {
   double answer(const Vertex& end, const CorrectionProbabilities& q);
   // Where the learned choice says the proxy does not pay: the meshes alone, as exact
   // visibility traces them; while the pixel has little evidence and evidence could make the
-  // proxy pay, one segment in kExploreOneIn traces proxy and meshes both (an exact answer
+  // proxy pay, one segment in kLearnedExploreOneIn traces proxy and meshes both (an exact answer
   // too) to keep learning.
   double exact_answer(const Vertex& end);
   // With occluder disks as V': the exactly traced part first, then the disks, corrected by
@@ -96,8 +96,6 @@ class ControlVariatePoint final : public PointVisibility {
   bool corrections_stale_ = false, connection_corrections_stale_ = false;  // learned: evidence added since computed
   bool trace_exactly_ = false;  // learned with costs: light segments traced exactly (light_corrections())
   bool explore_ = false;        // and some of them explored (the proxy could pay)
-  static constexpr int kExploreOneIn = 8;
-  static constexpr std::uint64_t kExploreUntil = 16;  // proxy answers the pixel has seen
 };
 
 class ControlVariateVisibility final : public Visibility {
@@ -323,8 +321,8 @@ double ControlVariatePoint::exact_answer(const Vertex& end) {
   const double u = point_.choices->uniform();
   ++stats.control_variate.traced_exactly;
   *point_.p1_count += 1;  // the proxy alone: never
-  const bool learning = explore_ && evidence.answered[0] + evidence.answered[1] < ControlVariatePoint::kExploreUntil;
-  if (!(learning && u * kExploreOneIn < 1)) {
+  const bool learning = learned_keeps_exploring(explore_, evidence);
+  if (!(learning && u * kLearnedExploreOneIn < 1)) {
     const ControlVariateVisibility::PixelCosts& c = shared_.pixel_costs_[point_.pixel];
     if (!learning && (c.segments >= ControlVariateVisibility::kCostSegments || c.instance != point_.hit->instance))
       shared_.pixel_settled_[point_.pixel] = point_.hit->instance;
