@@ -160,10 +160,11 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
       const ShadowSegment& s = sample.segment;
       const double c = luminance(sample.contribution);
       squares += c * c / 2;
-      if (!world.mesh_blocks(s.from, s.to)) value[k] += c;
       const SegmentQueryCosts q = segment_query_costs(world, camera, s.from, s.to, s.instance, options.split);
+      // The exact answer: the own mesh (which the split answer traced exactly), else the rest.
       const ProxyAnswer answer = proxy_answer(world, s.from, s.to, s.instance, options.split, uncounted, false);
       const bool mesh = !answer.own_blocks && world.mesh_blocks(s.from, s.to, answer.rest);
+      if (!answer.own_blocks && !mesh) value[k] += c;
       for (const std::size_t i : {static_cast<std::size_t>(s.instance), n}) {
         sums[i].camera += q.camera * per_segment, sums[i].exact += q.exact, sums[i].proxy += q.proxy;
         sums[i].correction += q.correction;
