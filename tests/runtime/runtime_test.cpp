@@ -45,6 +45,18 @@ class Runtime : public testing::ScratchFolder {
     }
   }
 
+  // Segment ends for the estimators: the knot's centre (inside its hull, between the
+  // strands: in the hull, not in the mesh) and two points ten diagonals away, the segment
+  // between which the hull's outside claim covers.
+  struct Ends {
+    Vertex centre, far_a, far_b;
+  };
+  Ends segment_ends() const {
+    const BoundingBox box = bounding_box(knot_);
+    const Vertex centre = 0.5 * (box.min + box.max);
+    return {centre, centre + Vertex(10, 0, 0) * box.diagonal(), centre + Vertex(0, 10, 0) * box.diagonal()};
+  }
+
   std::filesystem::path mesh_path_;
   TriangleMesh knot_;
 };
@@ -257,9 +269,7 @@ TEST_F(Runtime, EstimatesAreUnbiasedWhereTheClaimCoversASegmentAndWhereItDoesNot
   const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
   const PlacedProxy placed = hull.place();
   const ShadowEstimator estimator(placed);
-  const BoundingBox box = bounding_box(knot_);
-  const Vertex centre = 0.5 * (box.min + box.max);
-  const Vertex far_a = centre + Vertex(10, 0, 0) * box.diagonal(), far_b = centre + Vertex(0, 10, 0) * box.diagonal();
+  const auto [centre, far_a, far_b] = segment_ends();
   // A light inside the hull (between the knot's strands: in the hull, not in the mesh).
   ASSERT_EQ(estimator.form(far_a, far_b), ProxyKind::outside);
   ASSERT_EQ(estimator.form(centre, far_b), ProxyKind::general);
@@ -307,9 +317,7 @@ TEST_F(Runtime, ControlVariateWithCostsTracesExactlyWhereTheProxyDoesNotPay) {
   const RuntimeProxy hull = RuntimeProxy::load(folder_, "hull-32", mesh_path_);
   const PlacedProxy placed = hull.place();
   const ShadowEstimator estimator(placed);
-  const BoundingBox box = bounding_box(knot_);
-  const Vertex centre = 0.5 * (box.min + box.max);
-  const Vertex far_a = centre + Vertex(10, 0, 0) * box.diagonal(), far_b = centre + Vertex(0, 10, 0) * box.diagonal();
+  const auto [centre, far_a, far_b] = segment_ends();
   ASSERT_EQ(estimator.form(far_a, far_b), ProxyKind::outside);
   const CorrectionOptions options{.scale = 2, .floor = 0.05};
   for (const bool mesh_hit : {false, true}) {
