@@ -181,6 +181,52 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
   }
 }
 
+// A session continued in runs of 1, 2 and 3 passes gives one render's 6 passes bit for bit
+// in every mode, the learned ones included (each pixel keeps what it learned between runs),
+// and its stats add up; a run stops at options.spp whatever it asks for, and a run with a
+// time limit renders at least one pass.
+TEST(Renderer, SessionContinuedInRunsIsOneRender) {
+  const ModeScene s = mode_scene(8);
+  const RenderWorld world(s.scene, s.proxies);
+  std::vector<RenderOptions> modes;
+  modes.push_back({.visibility = VisibilityMode::exact, .spp = 6, .seed = 5});
+  modes.push_back({.visibility = VisibilityMode::bounds, .spp = 6, .shadow_rays = 2, .seed = 5});
+  modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive, .probe_rays = 4,
+                   .probe_passes = 2, .spp = 6, .seed = 5});
+  modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::optimal, .spp = 6, .seed = 5});
+  modes.push_back({.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
+                   .estimator = StochasticEstimator::control_variate, .spp = 6, .seed = 5});
+  modes.push_back({.integrator = IntegratorKind::vpl, .visibility = VisibilityMode::stochastic,
+                   .probabilities = ProbabilityMode::learned, .estimator = StochasticEstimator::control_variate, .spp = 6,
+                   .seed = 5, .vpls = 32, .bounces = 2});
+  for (const RenderOptions& options : modes) {
+    const std::string mode = std::string(name_of(options.integrator)) + " " + std::string(name_of(options.visibility)) + " " +
+                             std::string(name_of(options.probabilities));
+    const RenderResult whole = render(s.scene, world, options);
+    RenderSession session(s.scene, world, options);
+    EXPECT_EQ(session.passes(), 0) << mode;
+    EXPECT_EQ(session.run(1), 1) << mode;
+    EXPECT_EQ(session.run(2), 2) << mode;
+    const RenderResult halfway = session.result();
+    EXPECT_EQ(halfway.stats.passes, 3) << mode;
+    EXPECT_EQ(halfway.stats.camera_samples, 3u * 96u * 64u) << mode;
+    EXPECT_EQ(session.run(100), 3) << mode;  // stops at options.spp
+    EXPECT_EQ(session.run(1), 0) << mode;
+    const RenderResult continued = session.result();
+    EXPECT_EQ(continued.image.pixels, whole.image.pixels) << mode;
+    EXPECT_NE(halfway.image.pixels, whole.image.pixels) << mode;
+    EXPECT_EQ(continued.p1_map.pixels, whole.p1_map.pixels) << mode;
+    EXPECT_EQ(continued.stats.to_json(), [&] {
+      nlohmann::json j = whole.stats.to_json();
+      j["seconds"] = continued.stats.seconds;
+      return j;
+    }()) << mode;
+    EXPECT_GE(continued.stats.seconds, halfway.stats.seconds) << mode;
+  }
+  RenderSession timed(s.scene, world, {.spp = 1000, .seed = 5});
+  EXPECT_EQ(timed.run(1000, 1e-9), 1);
+}
+
 // Bounds gives exact's image bit for bit: where the inside proofs fire, where proxies touch
 // their mesh (the cubes' boxes hold them with 0.05 to spare, the balls' boxes touch them),
 // beyond 31 instances and under a non-uniform scale; with one shadow ray per sample (every

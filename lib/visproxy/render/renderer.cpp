@@ -190,139 +190,202 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
 
 }  // namespace
 
-RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  const int width = scene.camera.width, height = scene.camera.height;
-  validate(options);
-  const CameraRays camera(scene.camera);
-  const LightSampler lights(scene);
-  const bool stochastic = options.visibility == VisibilityMode::stochastic;
-  const bool counting = world.counting();
-  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+// Everything a render keeps between passes: the per-pixel sums and the strategies' own
+// per-pixel state, so that a session continued in several runs draws and answers exactly
+// what one run of all its passes would.
+struct RenderSession::State {
+  State(const Scene& scene_, const RenderWorld& world_, const RenderOptions& options_)
+      : scene(scene_),
+        world(world_),
+        options(options_),
+        width(scene_.camera.width),
+        height(scene_.camera.height),
+        camera(scene_.camera),
+        lights(scene_),
+        pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height)),
+        visibility_context{scene_, world_, options, lights, pixels, {}, {}, {}} {}
 
-  VisibilityContext visibility_context{scene, world, options, lights, pixels, {}, {}, {}};
-  const bool optimal = stochastic && options.probabilities == ProbabilityMode::optimal;
-  if (optimal) visibility_context.optimal = scene_optimal_probabilities(visibility_context);
+  const Scene& scene;
+  const RenderWorld& world;
+  const RenderOptions options;
+  const int width, height;
+  const CameraRays camera;
+  const LightSampler lights;
+  const std::size_t pixels;
+  VisibilityContext visibility_context;
+  bool optimal = false;
   SceneCorrectionCosts correction_costs;
+  std::unique_ptr<Visibility> visibility;
+  std::unique_ptr<IntegratorContext> integrator_context;
+  std::unique_ptr<Integrator> integrator;
+  bool needs_lights = true;
+  std::vector<Color> sum;
+  std::vector<double> p1_sum, p1_count, tests;
+  tbb::enumerable_thread_specific<RenderStats> thread_stats;
+  std::unique_ptr<tbb::enumerable_thread_specific<std::unique_ptr<PointVisibility>>> thread_visibility;
+  int passes = 0;
+  double seconds = 0;  // in the constructor and in run(), not between runs
+
+  void shade(int px, int py, int pass);
+};
+
+void RenderSession::State::shade(int px, int py, int pass) {
+  const std::size_t pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px);
+  // Camera and light samples come from one stream, the stochastic estimators' choices
+  // (terms, corrections, probe rays) from another: every visibility mode traces the same
+  // segments for a seed, so images of two modes differ only by their visibility answers.
+  PixelRandom random(options.seed, pixel, static_cast<std::uint64_t>(pass));
+  PixelRandom choices(options.seed ^ kChoiceStream, pixel, static_cast<std::uint64_t>(pass));
+  RenderStats& stats = thread_stats.local();
+  const bool counting = world.counting();
+  const std::uint64_t tests_before = stats.exact_tests + stats.proxy_tests;
+  const TraversalCounts counts_before = RenderWorld::thread_counts();
+  // Whatever path the sample takes, its work lands in the stats and the cost map.
+  const ScopeExit account([&] {
+    const TraversalCounts& now = RenderWorld::thread_counts();
+    const std::uint64_t steps = now.nodes - counts_before.nodes, primitives = now.primitives - counts_before.primitives;
+    stats.traversal_steps += steps;
+    stats.primitive_tests += primitives;
+    tests[pixel] += counting ? static_cast<double>(steps + primitives)
+                             : static_cast<double>(stats.exact_tests + stats.proxy_tests - tests_before);
+  });
+  ++stats.camera_samples;
+  const double jx = random.uniform();
+  const double jy = random.uniform();
+  const std::optional<SurfaceHit> hit = world.intersect(camera.origin(), camera.direction(px + jx, py + jy));
+  if (!hit) return;
+  if (hit->light >= 0) {
+    const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
+    if (hit->light_front || light.two_sided) sum[pixel] += light.radiance;
+    return;
+  }
+  if (needs_lights && lights.empty()) return;
+  ++stats.shading_points;
+  const ShadingPoint point{.pixel = pixel,
+                           .pass = pass,
+                           .hit = &*hit,
+                           .position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal,
+                           .choices = &choices,
+                           .stats = &stats,
+                           .p1_sum = &p1_sum[pixel],
+                           .p1_count = &p1_count[pixel]};
+  const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
+  PointVisibility& answers = *thread_visibility->local();
+  answers.begin(point);
+  sum[pixel] += integrator->shade(point, brdf, random, answers);
+  answers.end();
+}
+
+RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(options);
+  state_ = std::make_unique<State>(scene, world, options);
+  State& s = *state_;
+  const bool stochastic = options.visibility == VisibilityMode::stochastic;
+  s.optimal = stochastic && options.probabilities == ProbabilityMode::optimal;
+  if (s.optimal) s.visibility_context.optimal = scene_optimal_probabilities(s.visibility_context);
   if (stochastic && options.probabilities == ProbabilityMode::learned && options.estimator == StochasticEstimator::control_variate &&
       options.integrator == IntegratorKind::direct) {
-    correction_costs = scene_correction_costs(visibility_context);
-    visibility_context.correction_costs = correction_costs.costs;
-    visibility_context.correction_priors = correction_costs.priors;
+    s.correction_costs = scene_correction_costs(s.visibility_context);
+    s.visibility_context.correction_costs = s.correction_costs.costs;
+    s.visibility_context.correction_priors = s.correction_costs.priors;
   }
-  const std::unique_ptr<Visibility> visibility = make_visibility(visibility_context);
-  const IntegratorContext integrator_context{scene, world, options, lights};
-  const std::unique_ptr<Integrator> integrator = make_integrator(integrator_context);
+  s.visibility = make_visibility(s.visibility_context);
+  s.integrator_context = std::make_unique<IntegratorContext>(IntegratorContext{scene, world, s.options, s.lights});
+  s.integrator = make_integrator(*s.integrator_context);
   // The VPL integrator shades with its VPLs even where no area light is left.
-  const bool needs_lights = options.integrator == IntegratorKind::direct;
+  s.needs_lights = options.integrator == IntegratorKind::direct;
+  s.sum.assign(s.pixels, Color::Zero());
+  s.p1_sum.assign(s.pixels, 0.0);
+  s.p1_count.assign(s.pixels, 0.0);
+  s.tests.assign(s.pixels, 0.0);
+  s.thread_visibility = std::make_unique<tbb::enumerable_thread_specific<std::unique_ptr<PointVisibility>>>(
+      [&s] { return s.visibility->point_visibility(); });
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
-  std::vector<Color> sum(pixels, Color::Zero());
-  std::vector<double> p1_sum(sum.size(), 0.0), p1_count(sum.size(), 0.0), tests(sum.size(), 0.0);
-  tbb::enumerable_thread_specific<RenderStats> thread_stats;
-  tbb::enumerable_thread_specific<std::unique_ptr<PointVisibility>> thread_visibility([&] { return visibility->point_visibility(); });
+RenderSession::~RenderSession() = default;
+RenderSession::RenderSession(RenderSession&&) noexcept = default;
+RenderSession& RenderSession::operator=(RenderSession&&) noexcept = default;
 
-  auto shade = [&](int px, int py, int pass) {
-    const std::size_t pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px);
-    // Camera and light samples come from one stream, the stochastic estimators' choices
-    // (terms, corrections, probe rays) from another: every visibility mode traces the same
-    // segments for a seed, so images of two modes differ only by their visibility answers.
-    PixelRandom random(options.seed, pixel, static_cast<std::uint64_t>(pass));
-    PixelRandom choices(options.seed ^ kChoiceStream, pixel, static_cast<std::uint64_t>(pass));
-    RenderStats& stats = thread_stats.local();
-    const std::uint64_t tests_before = stats.exact_tests + stats.proxy_tests;
-    const TraversalCounts counts_before = RenderWorld::thread_counts();
-    // Whatever path the sample takes, its work lands in the stats and the cost map.
-    const ScopeExit account([&] {
-      const TraversalCounts& now = RenderWorld::thread_counts();
-      const std::uint64_t steps = now.nodes - counts_before.nodes, primitives = now.primitives - counts_before.primitives;
-      stats.traversal_steps += steps;
-      stats.primitive_tests += primitives;
-      tests[pixel] += counting ? static_cast<double>(steps + primitives)
-                               : static_cast<double>(stats.exact_tests + stats.proxy_tests - tests_before);
-    });
-    ++stats.camera_samples;
-    const double jx = random.uniform();
-    const double jy = random.uniform();
-    const std::optional<SurfaceHit> hit = world.intersect(camera.origin(), camera.direction(px + jx, py + jy));
-    if (!hit) return;
-    if (hit->light >= 0) {
-      const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
-      if (hit->light_front || light.two_sided) sum[pixel] += light.radiance;
-      return;
-    }
-    if (needs_lights && lights.empty()) return;
-    ++stats.shading_points;
-    const ShadingPoint point{.pixel = pixel,
-                             .pass = pass,
-                             .hit = &*hit,
-                             .position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal,
-                             .choices = &choices,
-                             .stats = &stats,
-                             .p1_sum = &p1_sum[pixel],
-                             .p1_count = &p1_count[pixel]};
-    const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
-    PointVisibility& answers = *thread_visibility.local();
-    answers.begin(point);
-    sum[pixel] += integrator->shade(point, brdf, random, answers);
-    answers.end();
-  };
+int RenderSession::passes() const { return state_->passes; }
+double RenderSession::seconds() const { return state_->seconds; }
 
+int RenderSession::run(int passes, double seconds) {
+  State& s = *state_;
+  const auto start = std::chrono::steady_clock::now();
+  const double before = s.seconds;
   constexpr int tile = 16;
-  const int tiles_x = (width + tile - 1) / tile, tiles_y = (height + tile - 1) / tile;
-  int passes = 0;
-  for (; passes < options.spp; ++passes) {
+  const int tiles_x = (s.width + tile - 1) / tile, tiles_y = (s.height + tile - 1) / tile;
+  int done = 0;
+  while (done < passes && s.passes < s.options.spp) {
+    const int pass = s.passes;
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const tbb::blocked_range<int>& range) {
       for (int t = range.begin(); t != range.end(); ++t) {
         const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
-        for (int y = y0; y < std::min(y0 + tile, height); ++y)
-          for (int x = x0; x < std::min(x0 + tile, width); ++x) shade(x, y, passes);
+        for (int y = y0; y < std::min(y0 + tile, s.height); ++y)
+          for (int x = x0; x < std::min(x0 + tile, s.width); ++x) s.shade(x, y, pass);
       }
     });
+    ++s.passes, ++done;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (options.on_pass) options.on_pass(passes + 1, elapsed);
-    if (options.seconds > 0 && elapsed >= options.seconds) {
-      ++passes;
-      break;
-    }
+    s.seconds = before + elapsed;
+    if (s.options.on_pass) s.options.on_pass(s.passes, s.seconds);
+    if (seconds > 0 && elapsed >= seconds) break;
   }
+  return done;
+}
 
+RenderResult RenderSession::result() const {
+  const State& s = *state_;
+  const int passes = std::max(s.passes, 1);
+  const bool stochastic = s.options.visibility == VisibilityMode::stochastic;
   RenderResult result;
-  result.image = Image(width, height);
-  result.cost_map = Image(width, height);
-  if (stochastic) result.p1_map = Image(width, height);
-  for (std::size_t i = 0; i < sum.size(); ++i) {
-    result.image.pixels[i] = sum[i] / std::max(passes, 1);
-    result.cost_map.pixels[i] = Color::Constant(tests[i] / std::max(passes, 1));
-    if (stochastic) result.p1_map.pixels[i] = Color::Constant(p1_count[i] > 0 ? p1_sum[i] / p1_count[i] : 0.0);
+  result.image = Image(s.width, s.height);
+  result.cost_map = Image(s.width, s.height);
+  if (stochastic) result.p1_map = Image(s.width, s.height);
+  for (std::size_t i = 0; i < s.sum.size(); ++i) {
+    result.image.pixels[i] = s.sum[i] / passes;
+    result.cost_map.pixels[i] = Color::Constant(s.tests[i] / passes);
+    if (stochastic) result.p1_map.pixels[i] = Color::Constant(s.p1_count[i] > 0 ? s.p1_sum[i] / s.p1_count[i] : 0.0);
   }
-  for (const RenderStats& s : thread_stats) result.stats += s;
-  result.cut_map = integrator->cut_map(std::max(passes, 1));
-  result.stats.integrator = integrator->describe();
-  if (optimal)
+  for (const RenderStats& t : s.thread_stats) result.stats += t;
+  result.cut_map = s.integrator->cut_map(passes);
+  result.stats.integrator = s.integrator->describe();
+  if (s.optimal)
     for (const ProxyKind kind : {ProxyKind::outside, ProxyKind::inside, ProxyKind::general}) {
-      const Probabilities& p = visibility_context.optimal[static_cast<std::size_t>(kind)];
+      const Probabilities& p = s.visibility_context.optimal[static_cast<std::size_t>(kind)];
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
-  if (!correction_costs.costs.empty()) {
+  const SceneCorrectionCosts& costs = s.correction_costs;
+  if (!costs.costs.empty()) {
     nlohmann::json instances = nlohmann::json::array();
-    for (std::size_t i = 0; i < correction_costs.work.size(); ++i) {
-      const SegmentQueryCosts& w = correction_costs.work[i];
+    for (std::size_t i = 0; i < costs.work.size(); ++i) {
+      const SegmentQueryCosts& w = costs.work[i];
       instances.push_back({{"instance", i},
-                           {"mesh", scene.instances[i].mesh},
+                           {"mesh", s.scene.instances[i].mesh},
                            {"camera_work", w.camera},
                            {"exact_work", w.exact},
                            {"proxy_work", w.proxy},
                            {"correction_work", w.correction},
-                           {"proxy_blocks_share", correction_costs.priors[i].share[1]},
-                           {"wrong_when_letting_through", correction_costs.priors[i].disagreeing[0]},
-                           {"wrong_when_blocking", correction_costs.priors[i].disagreeing[1]}});
+                           {"proxy_blocks_share", costs.priors[i].share[1]},
+                           {"wrong_when_letting_through", costs.priors[i].disagreeing[0]},
+                           {"wrong_when_blocking", costs.priors[i].disagreeing[1]}});
     }
-    result.stats.learned_costs = {{"noise_per_segment", correction_costs.noise}, {"instances", instances}};
+    result.stats.learned_costs = {{"noise_per_segment", costs.noise}, {"instances", instances}};
   }
-  result.stats.passes = passes;
-  result.stats.counted = counting;
-  result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.stats.passes = s.passes;
+  result.stats.counted = s.world.counting();
+  result.stats.seconds = s.seconds;
   return result;
+}
+
+RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options) {
+  RenderSession session(scene, world, options);
+  // options.seconds counts from the start, the work before the first pass included.
+  const double budget = options.seconds > 0 ? std::max(options.seconds - session.seconds(), 1e-9) : 0;
+  session.run(options.spp, budget);
+  return session.result();
 }
 
 }  // namespace visproxy

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string_view>
 
@@ -32,6 +33,35 @@ struct RenderResult {
 /// Renders `scene` as seen through `world`. Each pixel has its own random stream, seeded
 /// by (seed, pixel, pass), so the image does not depend on the number of threads.
 RenderResult render(const Scene& scene, const RenderWorld& world, const RenderOptions& options);
+
+/// A render that goes on where it stopped: run() adds passes, and the passes of several
+/// runs are the passes of one render (pass p draws from the (seed, pixel, p) streams, and
+/// the strategies keep what their pixels learned), so that result() after runs of 3 and 5
+/// passes is render() of 8 passes, bit for bit. Renders of several modes can so take turns
+/// on a machine whose speed drifts, and each be timed over the same stretches of it.
+/// `scene`, `world` and the callbacks in `options` must outlive the session.
+class RenderSession {
+ public:
+  /// Does the work before the first pass (optimal probabilities, learned costs), timed.
+  RenderSession(const Scene& scene, const RenderWorld& world, const RenderOptions& options);
+  ~RenderSession();
+  RenderSession(RenderSession&&) noexcept;
+  RenderSession& operator=(RenderSession&&) noexcept;
+
+  /// Renders up to `passes` more passes, stopping early at options.spp in all or after the
+  /// pass that crosses `seconds` of this run (0: no limit). Returns the passes it rendered.
+  int run(int passes, double seconds = 0);
+  int passes() const;
+  /// The session's own time: the work before the first pass and every run, not the time
+  /// between runs.
+  double seconds() const;
+  /// The image and stats of the passes so far (stats.seconds: seconds()).
+  RenderResult result() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 /// Shadow segments as a renderer traces them, for measuring proxies on a scene: from points
 /// the camera sees (uniform over the image, jittered) to points sampled on the lights by
