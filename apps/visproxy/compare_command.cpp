@@ -33,6 +33,7 @@ struct CompareOptions {
   std::uint64_t seed = 1;
   int width = 0, height = 0;
   int convergence_points = 4;
+  int rounds = 8;
   IntegratorKind integrator = IntegratorKind::direct;
   int vpls = 1024, bounces = 1;
   std::uint64_t vpl_seed = 1;
@@ -142,15 +143,20 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   command->add_option("-o,--output", o->folder, "Output folder [default: compare-SCENENAME]");
   command->add_option("--proxy", o->proxies,
                       "Stochastic proxy spec to compare (repeatable) [default: every spec the scene's instances name]");
-  command->add_option("--seconds", o->seconds, "Time per mode for the table [default: 10]")->check(CLI::Range(0.01, 1e6));
+  command->add_option("--seconds", o->seconds, "Time per mode for the table, over all rounds [default: 10]")->check(CLI::Range(0.01, 1e6));
   command->add_option("--reference", o->reference,
                       "Reference image (.pfm or .exr); rendered exactly with --reference-spp when absent");
   command->add_option("--reference-spp", o->reference_spp, "Samples per pixel of the rendered reference [default: 4096]")
       ->check(CLI::Range(1, 1 << 20));
   command->add_option("--shadow-rays", o->shadow_rays, "Shadow rays per camera sample in every mode [default: 1]")->check(CLI::Range(1, 4096));
   command->add_option("--seed", o->seed, "Seed of the renders (the reference's two halves use seed + 1000003 and seed + 2000003) [default: 1]");
+  command->add_option("--rounds", o->rounds,
+                      "Turns the modes take: each renders --seconds / rounds per round, forwards and backwards in turn, "
+                      "so that the machine's drifting speed slows every mode alike [default: 8]")
+      ->check(CLI::Range(1, 1 << 16));
   command->add_option("--convergence-points", o->convergence_points,
-                      "Time budgets per mode for the MSE-against-time curve, halving from --seconds [default: 4]")
+                      "Points per mode of the MSE-against-time curve, read from the same renders at the end of rounds "
+                      "K, K/2, K/4, ... (K: --rounds) [default: 4]")
       ->check(CLI::Range(1, 12));
   command->add_option("--count-passes", o->count_passes,
                       "Passes of each mode re-rendered with visproxy's own BVH traversal (same seed) to count traversal "
@@ -215,21 +221,23 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     const std::vector<std::string> specs = stochastic_specs(scene, *o);
     const std::vector<Mode> all_modes = modes(specs, *o);
 
-    // The worlds of one stochastic proxy at a time (exact and bounds use the scene's first).
-    std::string world_spec = "\n";
-    std::unique_ptr<RenderWorld> world, counting;
-    auto use_world = [&](const std::string& spec) {
-      if (world && spec == world_spec) return;
-      counting.reset();
-      world.reset();
+    // One world per stochastic proxy spec (exact and bounds use the scene's first), all kept
+    // while the modes take turns; with its counting twin unless --no-count.
+    struct Worlds {
+      std::unique_ptr<RenderWorld> world, counting;
+    };
+    std::map<std::string, Worlds> worlds;
+    auto worlds_of = [&](const std::string& spec) -> const Worlds& {
+      if (const auto found = worlds.find(spec); found != worlds.end()) return found->second;
       proxy_options.stochastic_spec = spec.empty() ? std::nullopt : std::optional<std::string>(spec);
       const std::vector<MeshProxies> proxies = prepare_scene_proxies(scene, proxy_options);
-      world = std::make_unique<RenderWorld>(scene, proxies);
-      for (const std::string& note : world->notes()) std::cerr << "visproxy compare: note: " << note << "\n";
-      if (!o->no_count) counting = std::make_unique<RenderWorld>(scene, proxies, RenderWorldOptions{.counting = true});
-      world_spec = spec;
+      Worlds w;
+      w.world = std::make_unique<RenderWorld>(scene, proxies);
+      for (const std::string& note : w.world->notes()) std::cerr << "visproxy compare: note: " << note << "\n";
+      if (!o->no_count) w.counting = std::make_unique<RenderWorld>(scene, proxies, RenderWorldOptions{.counting = true});
+      return worlds.emplace(spec, std::move(w)).first->second;
     };
-    use_world("");
+    const RenderWorld* world = worlds_of("").world.get();
 
     std::string reference_note;
     if (!o->reference.empty()) {
@@ -289,36 +297,61 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     std::string md = "# visproxy compare: " + o->scene.string() + "\n\n" + std::to_string(scene.camera.width) + "x" +
                      std::to_string(scene.camera.height) + " pixels, " + std::to_string(o->shadow_rays) +
                      " shadow ray(s) per camera sample, seed " + std::to_string(o->seed) + ", equal time " +
-                     format_number(o->seconds) + " s per mode; " + reference_note + ".\n\n";
+                     format_number(o->seconds) + " s per mode in " + std::to_string(o->rounds) + " rounds; " + reference_note + ".\n\n";
     md += "| mode | time (s) | samples per pixel | shadow rays per pixel | exact tests per pixel | proxy tests per pixel | "
           "traversal steps per pixel | primitive tests per pixel | MSE | efficiency 1/(MSE x s) | efficiency / exact |\n";
     md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
     std::string csv = "mode,proxy,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,"
                       "traversal_steps_per_pixel,primitive_tests_per_pixel,mse,efficiency,efficiency_over_exact\n";
     std::string convergence = "mode,seconds_budget,seconds,samples_per_pixel,mse\n";
-    std::vector<PlotSeries> curves;
     double exact_efficiency = 0, error_white = 0;
-    for (std::size_t m = 0; m < all_modes.size(); ++m) {
-      const Mode& mode = all_modes[m];
-      use_world(mode.proxy);
-      PlotSeries curve{mode.name, {}, {}};
-      for (int point = o->convergence_points - 1; point >= 0; --point) {
-        RenderOptions options = mode.options;
-        options.seconds = o->seconds / std::pow(2.0, point);
-        const std::string label = "mode " + std::to_string(m + 1) + "/" + std::to_string(all_modes.size()) + " " + mode.name + ", " +
-                                  format_number(options.seconds) + " s";
-        if (terminal) options.on_pass = [&](int passes, double seconds) { draw_progress(label, seconds / options.seconds, passes, seconds); };
-        else if (point == 0) std::cerr << "visproxy compare: " << mode.name << "\n";
-        const RenderResult result = render(scene, *world, options);
-        if (terminal) std::fprintf(stderr, "\n");
+    // The modes take turns: --rounds rounds of --seconds / rounds each, in turn forwards and
+    // backwards, so that a machine whose speed drifts during the comparison slows every mode
+    // alike. Each mode is one render continued from round to round (RenderSession), timed
+    // over its own runs; the MSE-against-time curve reads it at the end of rounds K, K/2, ...
+    const int rounds = o->rounds;
+    std::vector<int> checkpoints;
+    for (int k = 0; k < o->convergence_points; ++k)
+      if (const int r = std::max(1, rounds >> k); std::find(checkpoints.begin(), checkpoints.end(), r) == checkpoints.end())
+        checkpoints.push_back(r);
+    std::vector<RenderSession> sessions;
+    sessions.reserve(all_modes.size());
+    for (const Mode& mode : all_modes) sessions.emplace_back(scene, *worlds_of(mode.proxy).world, mode.options);
+    std::vector<PlotSeries> curves;
+    std::vector<std::string> convergence_rows(all_modes.size());
+    for (const Mode& mode : all_modes) curves.push_back({mode.name, {}, {}});
+    for (int round = 1; round <= rounds; ++round) {
+      if (!terminal) std::cerr << "visproxy compare: round " << round << " of " << rounds << "\n";
+      for (std::size_t k = 0; k < all_modes.size(); ++k) {
+        const std::size_t m = round % 2 == 1 ? k : all_modes.size() - 1 - k;
+        const std::string label = "round " + std::to_string(round) + "/" + std::to_string(rounds) + " mode " + std::to_string(m + 1) +
+                                  "/" + std::to_string(all_modes.size()) + " " + all_modes[m].name;
+        RenderSession& session = sessions[m];
+        const double before = session.seconds(), budget = o->seconds / rounds;
+        const int passes_before = session.passes();
+        session.run(1 << 24, budget);
+        if (terminal) {
+          draw_progress(label, (session.seconds() - before) / budget, session.passes() - passes_before, session.seconds());
+          std::fprintf(stderr, "\n");
+        }
+        if (std::find(checkpoints.begin(), checkpoints.end(), round) == checkpoints.end()) continue;
+        const RenderResult result = session.result();
         const double mse = mean_squared_error(result.image, reference);
         char line[512];
-        std::snprintf(line, sizeof line, "%s,%.6g,%.6g,%d,%.10g\n", mode.name.c_str(), options.seconds, result.stats.seconds,
-                      result.stats.passes, mse);
-        convergence += line;
-        curve.x.push_back(result.stats.seconds);
-        curve.y.push_back(mse);
-        if (point != 0) continue;
+        std::snprintf(line, sizeof line, "%s,%.6g,%.6g,%d,%.10g\n", all_modes[m].name.c_str(), o->seconds * round / rounds,
+                      result.stats.seconds, result.stats.passes, mse);
+        convergence_rows[m] += line;
+        curves[m].x.push_back(result.stats.seconds);
+        curves[m].y.push_back(mse);
+      }
+    }
+    for (const std::string& rows : convergence_rows) convergence += rows;
+    for (std::size_t m = 0; m < all_modes.size(); ++m) {
+      const Mode& mode = all_modes[m];
+      const RenderResult result = sessions[m].result();
+      const double mse = mean_squared_error(result.image, reference);
+      char line[512];
+      {
         const RenderStats& s = result.stats;
         if (m == 0) error_white = 4 * std::sqrt(mse);  // error maps: white at 4x exact's RMS error
         write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
@@ -335,7 +368,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         // The first passes again through the counting traversal: deterministic work figures,
         // scaled to the passes reached (every pass draws the same distribution of samples).
         double steps = std::nan(""), primitives = std::nan("");
-        if (counting) {
+        if (const RenderWorld* counting = worlds_of(mode.proxy).counting.get()) {
           RenderOptions counted = mode.options;
           // Learned probabilities change from pass to pass: those modes are counted in full.
           const bool stationary = mode.options.probabilities != ProbabilityMode::learned && mode.options.probe_passes == 0;
@@ -363,9 +396,10 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                       steps, primitives, mse, efficiency, relative);
         csv += line;
       }
-      curves.push_back(std::move(curve));
     }
-    md += "\nMSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance); "
+    md += "\nTime: each mode's own render time (its set-up and its turns), the modes having taken " + std::to_string(rounds) +
+          " turns of " + format_number(o->seconds / rounds) + " s each, forwards and backwards in turn. "
+          "MSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance); "
           "efficiency takes the MSE less the reference's own noise (the two add), where it is known. "
           "Exact and proxy tests: segment queries against meshes and against proxies (adaptive modes include their probe "
           "rays). Traversal steps and primitive tests: BVH nodes visited and triangles or balls tested by the shadow "

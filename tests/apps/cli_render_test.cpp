@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "apps/cli_test_support.h"
 #include "visproxy/core/errors.h"
@@ -294,7 +295,7 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
   ASSERT_EQ(generated.exit_code, 0) << generated.err;
   const std::filesystem::path out = folder_ / "compare";
   const auto result = testing::run_visproxy("compare '" + (folder_ / "hairball" / "hairball.json").string() + "' -o '" + out.string() +
-                                            "' --seconds 0.05 --reference-spp 256 --convergence-points 2 --count-passes 1 "
+                                            "' --seconds 0.05 --rounds 4 --reference-spp 256 --convergence-points 2 --count-passes 1 "
                                             "--width 16 --height 12 --proxy hull:32 --cache '" + (folder_ / "cache").string() + "'");
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const std::string table = read_file(out / "table.md");
@@ -310,6 +311,29 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
   const std::string convergence = read_file(out / "convergence.csv");
   EXPECT_EQ(std::count(convergence.begin(), convergence.end(), '\n'), 1 + 8 * 2);
+  EXPECT_NE(table.find("0.05 s per mode in 4 rounds"), std::string::npos) << table;
+  // The curve is read from the table's own renders, at the end of rounds 2 and 4: per mode,
+  // a point at half the budget with no more samples, then the table's samples per pixel.
+  std::istringstream points(convergence), rows(csv);
+  std::string point_line, row_line;
+  std::getline(points, point_line), std::getline(rows, row_line);
+  for (int mode = 0; mode < 8; ++mode) {
+    std::string half, full;
+    std::getline(points, half), std::getline(points, full), std::getline(rows, row_line);
+    auto field = [](const std::string& line, std::size_t index) {  // mode names hold no comma
+      std::vector<std::string> fields(1);
+      for (const char c : line) {
+        if (c == ',') fields.emplace_back();
+        else fields.back().push_back(c);
+      }
+      return index < fields.size() ? fields[index] : std::string("?");
+    };
+    EXPECT_EQ(field(half, 1), "0.025") << half;
+    EXPECT_EQ(field(full, 1), "0.05") << full;
+    EXPECT_EQ(field(half, 0), field(full, 0));
+    EXPECT_LE(std::stoi(field(half, 3)), std::stoi(field(full, 3))) << half << " / " << full;
+    EXPECT_EQ(field(full, 3), field(row_line, 3)) << full << " / " << row_line;  // samples per pixel
+  }
   // The exact row's efficiency ratio is 1 by definition.
   const std::size_t exact_row = csv.find("\"exact\"");
   const std::string row = csv.substr(exact_row, csv.find('\n', exact_row) - exact_row);
