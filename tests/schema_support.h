@@ -20,9 +20,25 @@ inline nlohmann::json read_schema(const std::string& name) {
 /// every key of an object described (by "properties" or "additionalProperties"), constants
 /// and enumerations matched, arrays' items checked, "$ref"s followed (within the schema, or
 /// to another schema file of data/schemas named by its file name).
-/// Alternatives ("oneOf") are not descended into.
+/// Alternatives ("oneOf") are descended into when exactly one of them names the value's
+/// JSON type (an object or null, say); else they are not checked.
 inline void expect_described(const nlohmann::json& value, const nlohmann::json& schema, const nlohmann::json& part,
                              const std::string& where) {
+  if (part.contains("oneOf")) {
+    const std::string type = value.is_null()     ? "null"
+                             : value.is_object() ? "object"
+                             : value.is_array()  ? "array"
+                             : value.is_string() ? "string"
+                             : value.is_boolean() ? "boolean"
+                             : value.is_number_integer() ? "integer"
+                                                         : "number";
+    const nlohmann::json* chosen = nullptr;
+    int matching = 0;
+    for (const auto& alternative : part.at("oneOf"))
+      if (alternative.value("type", std::string()) == type) chosen = &alternative, ++matching;
+    if (matching == 1) return expect_described(value, schema, *chosen, where);
+    return;
+  }
   if (part.contains("$ref")) {
     const std::string ref = part.at("$ref");  // "#/$defs/NAME", or another schema of data/schemas by file name
     if (ref.rfind("#", 0) != 0) {

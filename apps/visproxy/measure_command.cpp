@@ -98,10 +98,11 @@ void measure_folder(const std::filesystem::path& mesh_path, const std::filesyste
   }
   if (const auto share = manifest.find("render_share"); share != manifest.end())
     std::printf(
-        "render: testing shadow rays against the mesh takes %.1f %% of a camera sample's time in %s (%.2f shadow rays of "
-        "%.1f ns per sample of %.0f ns, one thread, %dx%d pixels); 'visproxy report' predicts each use's render gain from "
-        "it\n",
-        100 * (*share)["share"].get<double>(), options.scene.string().c_str(),
+        "render: testing shadow rays against the mesh takes %.1f %% (%.1f-%.1f %% over %d timed rounds) of a camera "
+        "sample's time in %s (%.2f shadow rays of %.1f ns per sample of %.0f ns, one thread, %dx%d pixels); 'visproxy "
+        "report' predicts each use's render gain from it\n",
+        100 * (*share)["share"].get<double>(), 100 * (*share)["share_range"][0].get<double>(),
+        100 * (*share)["share_range"][1].get<double>(), (*share)["rounds"].get<int>(), options.scene.string().c_str(),
         (*share)["shadow_rays_per_camera_sample"].get<double>(), (*share)["mesh_ns_per_shadow_ray"].get<double>(),
         (*share)["ns_per_camera_sample"].get<double>(), (*share)["width"].get<int>(), (*share)["height"].get<int>());
   std::printf(

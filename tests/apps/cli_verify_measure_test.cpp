@@ -294,10 +294,17 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
   EXPECT_GT(share.at("share").get<double>(), 0.0);
   EXPECT_LT(share.at("share").get<double>(), 1.0);
   EXPECT_LE(std::max(share.at("width").get<int>(), share.at("height").get<int>()), 128);
-  EXPECT_NEAR(share.at("share").get<double>(),
-              share.at("shadow_rays_per_camera_sample").get<double>() * share.at("mesh_ns_per_shadow_ray").get<double>() /
-                  share.at("ns_per_camera_sample").get<double>(),
-              1e-9);
+  // Timed in 6 rounds of a render pass and a pass of the segments: the share is the median
+  // round's, inside the rounds' range, and the medians of its parts give it back within
+  // that range (each round's ratio bounds the ratio of the medians).
+  EXPECT_EQ(share.at("rounds").get<int>(), 6);
+  const double low = share.at("share_range").at(0).get<double>(), high = share.at("share_range").at(1).get<double>();
+  EXPECT_LE(low, share.at("share").get<double>());
+  EXPECT_GE(high, share.at("share").get<double>());
+  const double of_medians = share.at("shadow_rays_per_camera_sample").get<double>() *
+                            share.at("mesh_ns_per_shadow_ray").get<double>() / share.at("ns_per_camera_sample").get<double>();
+  EXPECT_GE(of_medians, 0.95 * low);  // 5 %: a round's shadow rays per sample differ from the whole's
+  EXPECT_LE(of_medians, 1.05 * high);
   // The recommendation is made on the scene's rays, and says so, per shadow ray and per render
   // (bounds rest on proved claims).
   ASSERT_EQ(testing::run_visproxy("verify '" + bunny + "' '" + folder.string() + "'").exit_code, 0);
@@ -306,6 +313,7 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
   const json recommendation = json::parse(read_file(folder / "recommendation.json"));
   EXPECT_EQ(recommendation["rays"], "20000 shadow rays of the scene " + scene);
   EXPECT_EQ(recommendation["render_share"]["share"], share.at("share"));
+  EXPECT_EQ(recommendation["render_share"]["share_range"], share.at("share_range"));
   const json& bounds = recommendation["uses"]["bounds"];
   ASSERT_TRUE(bounds.contains("render_efficiency")) << bounds.dump();
   // Bounds leave the noise as it is: the render's figure is Amdahl's law of the ray's.

@@ -364,5 +364,32 @@ TEST(Recommendation, TheRenderFiguresComeFromTheRendersNoise) {
   const double ratio = old.prediction.variance / (fractions.v_avg() * (1 - fractions.v_avg()));
   EXPECT_NEAR(old.render_efficiency, render_efficiency(old.prediction.efficiency, ratio, s), 1e-12);
 }
+
+// The render share is timed in rounds; the render interval spans the share's range (the
+// render's gain is monotone in it), the point stays at the median share, and a range edited
+// by hand so that it leaves out the share is widened to hold it.
+TEST(Recommendation, TheRenderIntervalSpansTheSharesRange) {
+  auto manifest_with = [](const json& range) {
+    json box = entry("box", "outside", {6000, 0, 300, 3700}, 30, 200);
+    box["measure"]["rays"]["kind"] = "scene shadow segments";
+    json m = manifest_of({box});
+    m["render_share"] = {{"share", 0.3}, {"scene", "s.json"}};
+    if (!range.is_null()) m["render_share"]["share_range"] = range;
+    return m;
+  };
+  auto bounds = [](const json& m) { return recommend_proxies(m, as_claimed()).proxies.at(0).uses[index_of(ProxyUse::bounds)]; };
+  const UseFigures narrow = bounds(manifest_with(nullptr)), wide = bounds(manifest_with({0.1, 0.5}));
+  EXPECT_DOUBLE_EQ(narrow.render_efficiency, wide.render_efficiency);
+  ASSERT_GT(wide.prediction.efficiency, 1);  // a gain: more share, more of it
+  EXPECT_LT(wide.render_interval.lower, narrow.render_interval.lower);
+  EXPECT_GT(wide.render_interval.upper, narrow.render_interval.upper);
+  EXPECT_NEAR(wide.render_interval.upper, render_efficiency(wide.interval.upper, 1, 0.5), 1e-12);
+  EXPECT_NEAR(wide.render_interval.lower, render_efficiency(wide.interval.lower, 1, 0.1), 1e-12);
+  const UseFigures edited = bounds(manifest_with({0.4, 0.6}));
+  EXPECT_NEAR(edited.render_interval.lower, render_efficiency(edited.interval.lower, 1, 0.3), 1e-12);
+  const json out = recommendation_json(recommend_proxies(manifest_with({0.4, 0.6}), as_claimed()), manifest_with({0.4, 0.6}));
+  EXPECT_EQ(out["render_share"]["share_range"], json({0.3, 0.6}));
+  testing::expect_described(out, "recommendation.schema.json");
+}
 }  // namespace
 }  // namespace visproxy

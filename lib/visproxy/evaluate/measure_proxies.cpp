@@ -149,10 +149,15 @@ void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vect
 // The share of a camera sample's time that testing shadow rays against the mesh takes in
 // `scene` (Amdahl's fraction for the render-level prediction): the scene rendered as
 // `visproxy render` renders it by default (direct light, exact visibility, one shadow ray
-// per sample), on one thread at no more than 128 x 128 pixels, for 5 passes; a pass's time
-// is the median of the last 4 (the first warms the caches). The mesh's part of a sample is
-// its shadow rays times the mesh's own cost per shadow ray, timed on the scene's segments.
-json render_share(Scene& scene, const RenderWorld& world, double mesh_ns_per_ray, std::uint64_t seed) {
+// per sample), on one thread at no more than 128 x 128 pixels. The mesh's part of a sample
+// is its shadow rays times the mesh's own cost per shadow ray on the scene's segments.
+// Both are timed in turns, one render pass and one pass of the timed segments against the
+// mesh per round (after a round that warms the caches), so that each round's share sees
+// one state of the machine: the share is the median round's, and the least and greatest
+// rounds' shares bound it (with 6 rounds, the median share lies between them with
+// probability 1 - 2^-5 for any distribution of rounds).
+json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_scene, std::span<const Segment> rays,
+                  const TimingOptions& timing, std::uint64_t seed) {
   // The camera made smaller for the render, and given back (the scene's meshes are not copied).
   const Camera camera = scene.camera;
   struct Restore {
@@ -163,36 +168,55 @@ json render_share(Scene& scene, const RenderWorld& world, double mesh_ns_per_ray
   const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
   scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
   scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  const int rounds = std::max(timing.blocks, 1);
   RenderOptions options;
-  options.spp = 5;
+  options.spp = rounds + 1;
   options.seed = seed;
-  std::vector<double> at_pass;
-  options.on_pass = [&](int, double seconds) { at_pass.push_back(seconds); };
+  const std::span<const Segment> timed = rays.first(std::min(rays.size(), timing.rays));
+  std::vector<double> shares, sample_ns, mesh_ns;
   RenderStats stats;
   {
     const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    stats = render(scene, world, options).stats;
+    RenderSession session(scene, world, options);
+    for (int round = 0; round <= rounds; ++round) {
+      const double before = session.seconds();
+      session.run(1);
+      const double pass_seconds = session.seconds() - before;
+      const double ray_ns = nanoseconds_per_ray_once(mesh_scene, timed);
+      const RenderStats so_far = session.result().stats;
+      const double samples = static_cast<double>(so_far.camera_samples - stats.camera_samples);
+      const double segments = static_cast<double>(so_far.shadow_rays - stats.shadow_rays);
+      stats = so_far;
+      if (round == 0 || !(samples > 0) || !(pass_seconds > 0)) continue;  // the first round warms the caches
+      const double ns = 1e9 * pass_seconds / samples;
+      sample_ns.push_back(ns);
+      mesh_ns.push_back(ray_ns);
+      shares.push_back(std::clamp(segments / samples * ray_ns / ns, 0.0, 1.0));
+    }
   }
-  std::vector<double> pass_seconds;
-  for (std::size_t i = 1; i < at_pass.size(); ++i) pass_seconds.push_back(at_pass[i] - at_pass[i - 1]);
-  std::sort(pass_seconds.begin(), pass_seconds.end());
-  const double samples_per_pass = static_cast<double>(stats.camera_samples) / std::max(stats.passes, 1);
+  auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  };
   const double shadow_rays_per_sample = static_cast<double>(stats.shadow_rays) / std::max(1.0, static_cast<double>(stats.camera_samples));
-  const double ns_per_sample =
-      pass_seconds.empty() || !(samples_per_pass > 0) ? 0 : 1e9 * pass_seconds[pass_seconds.size() / 2] / samples_per_pass;
-  const double mesh_ns_per_sample = shadow_rays_per_sample * mesh_ns_per_ray;
-  const double share = ns_per_sample > 0 ? std::clamp(mesh_ns_per_sample / ns_per_sample, 0.0, 1.0) : 0.0;
+  const double share = median(shares);
+  const double low = shares.empty() ? 0 : *std::min_element(shares.begin(), shares.end());
+  const double high = shares.empty() ? 0 : *std::max_element(shares.begin(), shares.end());
   return {{"description",
            "share of a camera sample's time (direct light, exact visibility, one shadow ray per sample, one thread) "
            "spent testing shadow rays against the mesh: shadow rays per sample x the mesh's ns per shadow ray on "
-           "the scene's segments, over the ns per sample"},
+           "the scene's segments, over the ns per sample, timed in turns (one render pass, then the segments against "
+           "the mesh, per round); share is the median round's, share_range the least and greatest rounds'"},
           {"width", scene.camera.width},
           {"height", scene.camera.height},
           {"passes", stats.passes},
-          {"ns_per_camera_sample", ns_per_sample},
+          {"rounds", shares.size()},
+          {"ns_per_camera_sample", median(sample_ns)},
           {"shadow_rays_per_camera_sample", shadow_rays_per_sample},
-          {"mesh_ns_per_shadow_ray", mesh_ns_per_ray},
-          {"share", share}};
+          {"mesh_ns_per_shadow_ray", median(mesh_ns)},
+          {"share", share},
+          {"share_range", {low, high}}};
 }
 
 // What the render's noise is made of, for predicting each use's noise over the whole
@@ -438,7 +462,7 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
   }
   if (timed) add_cost_model(manifest, mesh_work, proxy_work);
   if (timed && scene) {
-    json share = render_share(*scene, *world, reference.mesh_ns_per_ray, options.seed);
+    json share = render_share(*scene, *world, mesh_scene, reference.rays, options.timing, options.seed);
     share["scene"] = options.scene.string();
     share["noise"] = {{"description",
                        "the exact render's variance of one camera sample within its pixel (per colour channel, as the "

@@ -39,8 +39,12 @@ std::string rays_text(const json& rays) {
 
 std::string render_phrase(const Recommendation& r, const UseFigures& figures) {
   if (!std::isfinite(r.render_share) || std::isnan(figures.render_efficiency)) return "";
-  char share[32];
-  std::snprintf(share, sizeof share, "%.1f %%", 100 * r.render_share);
+  char share[64];
+  if (r.render_share_high > r.render_share_low)
+    std::snprintf(share, sizeof share, "%.1f %% (%.1f-%.1f %% over the timed rounds)", 100 * r.render_share,
+                  100 * r.render_share_low, 100 * r.render_share_high);
+  else
+    std::snprintf(share, sizeof share, "%.1f %%", 100 * r.render_share);
   return "; over the render of " + r.render_scene + ", whose samples spend " + share +
          " of their time testing shadow rays against the mesh, " + ratio_text(figures.render_efficiency) + "x [" +
          ratio_text(figures.render_interval.lower) + ", " + ratio_text(figures.render_interval.upper) + "]";
@@ -167,6 +171,11 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
   Recommendation r;
   if (const auto share = manifest.find("render_share"); share != manifest.end() && share->is_object()) {
     r.render_share = share->value("share", std::numeric_limits<double>::quiet_NaN());
+    r.render_share_low = r.render_share_high = r.render_share;
+    if (const auto range = share->find("share_range"); range != share->end() && range->is_array() && range->size() == 2) {
+      r.render_share_low = std::min(r.render_share, range->at(0).get<double>());
+      r.render_share_high = std::max(r.render_share, range->at(1).get<double>());
+    }
     r.render_scene = share->value("scene", std::string());
     if (const auto noise = share->find("noise"); noise != share->end() && noise->is_object()) {
       r.exact_variance = noise->value("exact_variance_per_sample", std::numeric_limits<double>::quiet_NaN());
@@ -214,6 +223,12 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
         figures.interval = efficiency_interval(kProxyUses[u], p.proved, counts, costs, figures.prediction.setting,
                                                r.seed + 0x9E3779B97F4A7C15ull * (r.proxies.size() * 3 + u + 1));
         if (std::isfinite(r.render_share)) {
+          // The render efficiency is monotone in the share: its interval spans the ends of
+          // the share's range.
+          auto over_shares = [&](auto&& at) {
+            const Interval a = at(r.render_share_low), b = at(r.render_share_high);
+            return Interval{std::min(a.lower, b.lower), std::max(a.upper, b.upper)};
+          };
           // The variance ratio at the prediction's point carries the interval's ends too.
           const double mesh_variance = fractions.v_avg() * (1 - fractions.v_avg());
           const double ratio = mesh_variance > 0 ? figures.prediction.variance / mesh_variance
@@ -240,12 +255,16 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
               return ray_cost_ratio > 0 ? at_end * cost_ratio / ray_cost_ratio : cost_ratio;
             };
             figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
-            figures.render_interval = {render_efficiency_of(cost_at(figures.interval.lower), render.high, r.render_share),
-                                       render_efficiency_of(cost_at(figures.interval.upper), render.low, r.render_share)};
+            figures.render_interval = over_shares([&](double share) {
+              return Interval{render_efficiency_of(cost_at(figures.interval.lower), render.high, share),
+                              render_efficiency_of(cost_at(figures.interval.upper), render.low, share)};
+            });
           } else {
             figures.render_efficiency = render_efficiency(figures.prediction.efficiency, ratio, r.render_share);
-            figures.render_interval = {render_efficiency(figures.interval.lower, ratio, r.render_share),
-                                       render_efficiency(figures.interval.upper, ratio, r.render_share)};
+            figures.render_interval = over_shares([&](double share) {
+              return Interval{render_efficiency(figures.interval.lower, ratio, share),
+                              render_efficiency(figures.interval.upper, ratio, share)};
+            });
           }
         }
       }
@@ -354,7 +373,9 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
        "(Var(V) c_mesh) / (Var c): how many times cheaper than tracing the mesh alone at equal error, with Var(V) = "
        "V_avg (1 - V_avg) and c the measured nanoseconds per ray on one core; intervals are 95 % over the sampling "
        "of the measured rays, widened by the spread of the proxy's cost over the timing blocks"},
-      {"render_share", std::isfinite(r.render_share) ? json{{"share", r.render_share}, {"scene", r.render_scene}}
+      {"render_share", std::isfinite(r.render_share) ? json{{"share", r.render_share},
+                                                             {"share_range", {r.render_share_low, r.render_share_high}},
+                                                             {"scene", r.render_scene}}
                                                       : json(nullptr)},
       {"uses", uses},
       {"proxies", proxies}};

@@ -29,7 +29,9 @@ struct UseFigures {
   /// optimal` finds (eq. 16's optimum over the render's segments), the other uses at
   /// `prediction`'s setting.
   double render_efficiency = std::numeric_limits<double>::quiet_NaN();
-  Interval render_interval;  ///< `interval`'s ends carried to the render, with the noise ratio's own 95 % interval
+  /// `interval`'s ends carried to the render, with the noise ratio's own 95 % interval and
+  /// the render share's range over its timed rounds.
+  Interval render_interval;
 };
 
 struct ProxyEfficiency {
@@ -63,6 +65,10 @@ struct Recommendation {
   /// The share of a sample's time that testing shadow rays against the mesh took in the
   /// scene measured (manifest render_share); NaN when there is none.
   double render_share = std::numeric_limits<double>::quiet_NaN();
+  /// The least and greatest share over the timed rounds (render_share.share_range); the
+  /// share itself when the manifest has no range. The render intervals span it.
+  double render_share_low = std::numeric_limits<double>::quiet_NaN();
+  double render_share_high = std::numeric_limits<double>::quiet_NaN();
   std::string render_scene;
   /// The exact render's variance of one camera sample within its pixel, its standard error
   /// and the camera samples it was found on (manifest render_share.noise); NaN when there

@@ -57,6 +57,10 @@ double PairedTiming::ratio_high() const {
   return r.empty() ? 0 : *std::max_element(r.begin(), r.end());
 }
 
+double nanoseconds_per_ray_once(const RayScene& scene, std::span<const Segment> rays) {
+  return rays.empty() ? 0 : 1e9 * seconds_per_ray(scene, rays);
+}
+
 double nanoseconds_per_ray(const RayScene& scene, std::span<const Segment> rays, const TimingOptions& options) {
   const std::span<const Segment> timed = rays.first(std::min(rays.size(), options.rays));
   if (timed.empty() || options.blocks < 1) return 0;

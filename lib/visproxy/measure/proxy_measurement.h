@@ -28,6 +28,10 @@ struct TimingOptions {
 /// the first options.rays rays, after one untimed pass to warm caches. 0 for no rays.
 double nanoseconds_per_ray(const RayScene& scene, std::span<const Segment> rays, const TimingOptions& options = {});
 
+/// One timed pass of segment_blocked over `rays` on this thread, without a warm-up: ns per
+/// ray (0 for no rays). For timings interleaved with other work.
+double nanoseconds_per_ray_once(const RayScene& scene, std::span<const Segment> rays);
+
 /// The cost of a proxy against the mesh's, timed in interleaved blocks on one thread.
 struct PairedTiming {
   std::vector<double> mesh_ns, proxy_ns;  ///< per block, ns per ray
