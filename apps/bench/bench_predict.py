@@ -6,8 +6,12 @@ For each scene (one proxied mesh, possibly instanced many times), R times over:
      efficiency of each use over the whole render (recommendation.json's render_efficiency
      and render_interval: the shadow ray's prediction carried to the render by the share of
      a sample's time the mesh's shadow tests take);
-  2. `visproxy compare SCENE` at equal time: the measured efficiency (1 / (MSE x time)) of
-     each mode over exact's.
+  2. `visproxy compare SCENE --equal samples --rounds 16` with the three modes below: the
+     measured efficiency (1 / (MSE x time)) of each mode over exact's. The modes take turns
+     and render the same passes in each, so that their images share their samples (the
+     MSE ratio is then the estimators' own) and each turn's time is weighed against
+     exact's in the same round (the median round's ratio, which the machine's pauses do
+     not move).
 It prints, per scene and use, the predictions (median, and the widest interval over the
 runs) against the measured ratios (median and range over the runs), and whether every
 measured ratio lies inside the predicted interval and within 25 % of the prediction.
@@ -20,7 +24,7 @@ Uses and the modes that realise them:
   control variate  <-> "<first spec> control variate learned" (its probabilities learned per pixel,
                        as near as the renderer gets to the optimum the prediction assumes)
 
-Usage: visproxy-bench-predict [--repetitions R] [--seconds S] [--rays N] [--reference-spp K]
+Usage: visproxy-bench-predict [--repetitions R] [--seconds S] [--rounds K] [--rays N] [--reference-spp K]
                               [--work DIR] [SCENE...]
 Without SCENE: the four prediction scenes in data/scenes (camel-herd, cow-field,
 knot-lanterns, far-armadillo).
@@ -82,6 +86,7 @@ def main():
     parser.add_argument("--scene-dir", default=os.environ.get("VISPROXY_SCENE_DIR", os.path.join(here, "..", "..", "data", "scenes")))
     parser.add_argument("--repetitions", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=4.0, help="time per mode of each compare run")
+    parser.add_argument("--rounds", type=int, default=16, help="turns of each compare run")
     parser.add_argument("--rays", type=int, default=200000, help="shadow segments of each measure run")
     # The reference's own noise adds to every mode's MSE: compare subtracts it, and a
     # reference far less noisy than a 4-second render (about 1000 spp here) keeps that
@@ -128,7 +133,8 @@ def main():
                     predicted[use].append((figures["render_efficiency"], figures["render_interval"], figures["efficiency"]))
             out = os.path.join(work, label, "compare-%d" % r)
             command = [args.visproxy, "compare", scene, "-o", out, "--seconds", str(args.seconds), "--seed", str(r),
-                       "--no-count", "--convergence-points", "1", "--proxy", first, "--cache", cache]
+                       "--no-count", "--convergence-points", "1", "--proxy", first, "--cache", cache,
+                       "--equal", "samples", "--rounds", str(args.rounds)] + sum([["--mode", m] for _, m in USES], [])
             command += ["--reference", reference] if os.path.exists(reference) else ["--reference-spp", str(args.reference_spp)]
             run(command, log)
             if not os.path.exists(reference):
@@ -146,7 +152,7 @@ def main():
             rows.append((label, use, spec or "-", share, predicted[use], measured[use]))
 
     print("\nPredicted against measured efficiency over exact, whole render, %d runs each (measure --scene + report, "
-          "then compare at %.1f s per mode).\nshare: the mesh's shadow tests' share of a sample's time; ray: the "
+          "then compare at equal samples, exact's pace for %.1f s per mode).\nshare: the mesh's shadow tests' share of a sample's time; ray: the "
           "shadow ray's predicted efficiency; render: the render's, median with the widest interval over the runs; "
           "measured: compare's efficiency over exact, median and range; inside: every measured ratio in the "
           "predicted interval; 25 %%: every one within 25 %% of the median prediction.\n" % (args.repetitions, args.seconds))

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +35,8 @@ struct CompareOptions {
   int width = 0, height = 0;
   int convergence_points = 4;
   int rounds = 8;
+  std::string equal = "time";
+  std::vector<std::string> only_modes;  // --mode: the modes' names without their proxy spec; empty: all
   IntegratorKind integrator = IntegratorKind::direct;
   int vpls = 1024, bounces = 1;
   std::uint64_t vpl_seed = 1;
@@ -95,7 +98,29 @@ std::vector<Mode> modes(const std::vector<std::string>& specs, const CompareOpti
     if (o.integrator == IntegratorKind::vpl && spec.starts_with("spheres:"))
       out.push_back({spec + " occluder disks", spec, base(VisibilityMode::spheres)});
   }
-  return out;
+  if (o.only_modes.empty()) return out;
+  // --mode: exact (every ratio's reference) and the modes named, by their name without the spec.
+  std::vector<Mode> kept;
+  for (Mode& mode : out) {
+    const std::string bare = mode.proxy.empty() ? mode.name : mode.name.substr(mode.proxy.size() + 1);
+    if (mode.name == "exact" || std::find(o.only_modes.begin(), o.only_modes.end(), bare) != o.only_modes.end())
+      kept.push_back(std::move(mode));
+  }
+  return kept;
+}
+
+// The names --mode accepts.
+const std::vector<std::string>& mode_names() {
+  static const std::vector<std::string> names = {"exact",
+                                                 "bounds",
+                                                 "eq8 equal",
+                                                 "eq8 adaptive",
+                                                 "eq8 adaptive + cost heuristic",
+                                                 "eq8 optimal",
+                                                 "control variate equal",
+                                                 "control variate learned",
+                                                 "occluder disks"};
+  return names;
 }
 
 std::string format_number(double value) {
@@ -154,6 +179,17 @@ void add_compare_command(CLI::App& app, int& exit_code) {
                       "Turns the modes take: each renders --seconds / rounds per round, forwards and backwards in turn, "
                       "so that the machine's drifting speed slows every mode alike [default: 8]")
       ->check(CLI::Range(1, 1 << 16));
+  command->add_option("--mode", o->only_modes,
+                      "Render only this mode (repeatable; exact is always rendered): exact, bounds, 'eq8 equal', 'eq8 "
+                      "adaptive', 'eq8 adaptive + cost heuristic', 'eq8 optimal', 'control variate equal', 'control variate "
+                      "learned', 'occluder disks' (each stochastic one for every --proxy) [default: every mode]")
+      ->check(CLI::IsMember(mode_names()));
+  command->add_option("--equal", o->equal,
+                      "time: every turn lasts --seconds / rounds; samples: every mode renders in each turn the passes "
+                      "exact rendered in its first turn, and a mode's time is its set-up plus exact's render time x the "
+                      "median over the rounds of its turn's time over exact's (common samples make the MSE ratios "
+                      "precise, and the median leaves out the machine's pauses) [default: time]")
+      ->check(CLI::IsMember({"time", "samples"}));
   command->add_option("--convergence-points", o->convergence_points,
                       "Points per mode of the MSE-against-time curve, read from the same renders at the end of rounds "
                       "K, K/2, K/4, ... (K: --rounds) [default: 4]")
@@ -297,12 +333,15 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     std::string md = "# visproxy compare: " + o->scene.string() + "\n\n" + std::to_string(scene.camera.width) + "x" +
                      std::to_string(scene.camera.height) + " pixels, " + std::to_string(o->shadow_rays) +
                      " shadow ray(s) per camera sample, seed " + std::to_string(o->seed) + ", equal time " +
-                     format_number(o->seconds) + " s per mode in " + std::to_string(o->rounds) + " rounds; " + reference_note + ".\n\n";
+                     format_number(o->seconds) + " s per mode in " + std::to_string(o->rounds) + " rounds" +
+                     (o->equal == "samples" ? std::string(", equal samples per round") : std::string()) + "; " + reference_note + ".\n\n";
     md += "| mode | time (s) | samples per pixel | shadow rays per pixel | exact tests per pixel | proxy tests per pixel | "
-          "traversal steps per pixel | primitive tests per pixel | MSE | efficiency 1/(MSE x s) | efficiency / exact |\n";
-    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+          "traversal steps per pixel | primitive tests per pixel | pass time / exact's, median (range) over rounds | MSE | "
+          "efficiency 1/(MSE x s) | efficiency / exact |\n";
+    md += "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
     std::string csv = "mode,proxy,seconds,samples_per_pixel,shadow_rays_per_pixel,exact_tests_per_pixel,proxy_tests_per_pixel,"
-                      "traversal_steps_per_pixel,primitive_tests_per_pixel,mse,efficiency,efficiency_over_exact\n";
+                      "traversal_steps_per_pixel,primitive_tests_per_pixel,pass_time_over_exact,pass_time_over_exact_low,"
+                      "pass_time_over_exact_high,mse,efficiency,efficiency_over_exact\n";
     std::string convergence = "mode,seconds_budget,seconds,samples_per_pixel,mse\n";
     double exact_efficiency = 0, error_white = 0;
     // The modes take turns: --rounds rounds of --seconds / rounds each, in turn forwards and
@@ -316,7 +355,16 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         checkpoints.push_back(r);
     std::vector<RenderSession> sessions;
     sessions.reserve(all_modes.size());
-    for (const Mode& mode : all_modes) sessions.emplace_back(scene, *worlds_of(mode.proxy).world, mode.options);
+    std::vector<double> setup_seconds;
+    for (const Mode& mode : all_modes) {
+      sessions.emplace_back(scene, *worlds_of(mode.proxy).world, mode.options);
+      setup_seconds.push_back(sessions.back().seconds());
+    }
+    // Per mode and round: the turn's seconds and passes.
+    std::vector<std::vector<double>> turn_seconds(all_modes.size());
+    std::vector<std::vector<int>> turn_passes(all_modes.size());
+    const bool equal_samples = o->equal == "samples";
+    int passes_per_turn = 0;  // equal samples: exact's passes in its first turn (the first turn of all)
     std::vector<PlotSeries> curves;
     std::vector<std::string> convergence_rows(all_modes.size());
     for (const Mode& mode : all_modes) curves.push_back({mode.name, {}, {}});
@@ -329,7 +377,11 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         RenderSession& session = sessions[m];
         const double before = session.seconds(), budget = o->seconds / rounds;
         const int passes_before = session.passes();
-        session.run(1 << 24, budget);
+        if (equal_samples && passes_per_turn > 0) session.run(passes_per_turn);
+        else session.run(1 << 24, budget);
+        if (equal_samples && passes_per_turn == 0) passes_per_turn = session.passes() - passes_before;
+        turn_seconds[m].push_back(session.seconds() - before);
+        turn_passes[m].push_back(session.passes() - passes_before);
         if (terminal) {
           draw_progress(label, (session.seconds() - before) / budget, session.passes() - passes_before, session.seconds());
           std::fprintf(stderr, "\n");
@@ -346,13 +398,32 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       }
     }
     for (const std::string& rows : convergence_rows) convergence += rows;
+    // Per mode: a pass's time over exact's in the same round, median and range over the rounds.
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v.empty() ? std::nan("") : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    };
+    std::vector<std::array<double, 3>> pass_time_ratio;
+    for (std::size_t m = 0; m < all_modes.size(); ++m) {
+      std::vector<double> ratios;
+      for (std::size_t r = 0; r < turn_seconds[m].size(); ++r)
+        if (turn_passes[m][r] > 0 && turn_passes[0][r] > 0 && turn_seconds[0][r] > 0)
+          ratios.push_back(turn_seconds[m][r] / turn_passes[m][r] / (turn_seconds[0][r] / turn_passes[0][r]));
+      pass_time_ratio.push_back({median(ratios), ratios.empty() ? std::nan("") : *std::min_element(ratios.begin(), ratios.end()),
+                                 ratios.empty() ? std::nan("") : *std::max_element(ratios.begin(), ratios.end())});
+    }
+    double exact_turns = 0;
+    for (const double t : turn_seconds[0]) exact_turns += t;
     for (std::size_t m = 0; m < all_modes.size(); ++m) {
       const Mode& mode = all_modes[m];
       const RenderResult result = sessions[m].result();
       const double mse = mean_squared_error(result.image, reference);
       char line[512];
       {
-        const RenderStats& s = result.stats;
+        RenderStats s = result.stats;
+        // Equal samples: the mode's set-up, then exact's render time scaled by the median
+        // round's ratio (every turn renders the same passes).
+        if (equal_samples) s.seconds = setup_seconds[m] + exact_turns * (m == 0 ? 1.0 : pass_time_ratio[m][0]);
         if (m == 0) error_white = 4 * std::sqrt(mse);  // error maps: white at 4x exact's RMS error
         write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
         write_png(folder / (file_stem(mode.name) + ".png"), result.image);
@@ -387,19 +458,26 @@ void add_compare_command(CLI::App& app, int& exit_code) {
         // Probe rays trace both the mesh and the proxy.
         const double exact_tests = static_cast<double>(s.exact_tests + s.probe_rays) / pixels;
         const double proxy_tests = static_cast<double>(s.proxy_tests + s.probe_rays) / pixels;
-        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.4g | %.4g | %.2f |\n", mode.name.c_str(),
-                      s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests, steps, primitives, mse,
-                      efficiency, relative);
+        const std::array<double, 3>& ratio = pass_time_ratio[m];
+        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.3f (%.3f-%.3f) | %.4g | %.4g | %.2f |\n",
+                      mode.name.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests,
+                      steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
         md += line;
-        std::snprintf(line, sizeof line, "\"%s\",%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g,%.6g\n", mode.name.c_str(),
-                      mode.proxy.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests,
-                      steps, primitives, mse, efficiency, relative);
+        std::snprintf(line, sizeof line, "\"%s\",%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g,%.6g\n",
+                      mode.name.c_str(), mode.proxy.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels,
+                      exact_tests, proxy_tests, steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
         csv += line;
       }
     }
-    md += "\nTime: each mode's own render time (its set-up and its turns), the modes having taken " + std::to_string(rounds) +
-          " turns of " + format_number(o->seconds / rounds) + " s each, forwards and backwards in turn. "
-          "MSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance); "
+    md += equal_samples
+              ? "\nTime: the modes took " + std::to_string(rounds) + " turns, forwards and backwards in turn, each of the " +
+                    std::to_string(passes_per_turn) + " passes exact rendered in its first turn of " + format_number(o->seconds / rounds) +
+                    " s; a mode's time is its set-up plus exact's render time times the median over the rounds of its turn's time "
+                    "over exact's. Pass time / exact's: a pass's time over exact's in the same round. "
+              : "\nTime: each mode's own render time (its set-up and its turns), the modes having taken " + std::to_string(rounds) +
+                    " turns of " + format_number(o->seconds / rounds) + " s each, forwards and backwards in turn. Pass time / "
+                    "exact's: a pass's time over exact's in the same round. ";
+    md += "MSE: mean over pixels and RGB channels of the squared difference to the reference (linear radiance); "
           "efficiency takes the MSE less the reference's own noise (the two add), where it is known. "
           "Exact and proxy tests: segment queries against meshes and against proxies (adaptive modes include their probe "
           "rays). Traversal steps and primitive tests: BVH nodes visited and triangles or balls tested by the shadow "

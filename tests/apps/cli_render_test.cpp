@@ -340,6 +340,50 @@ TEST_F(CliRender, CompareWritesTheTableImagesAndConvergence) {
   EXPECT_EQ(row.substr(row.rfind(',') + 1), "1") << row;
 }
 
+// --equal samples: every mode renders the passes exact rendered in its first turn, so the
+// modes' images share their samples: bounds, exact by proof, has exact's MSE to the digit.
+// --mode keeps exact and the modes named; a name it does not know is refused in one line.
+TEST_F(CliRender, CompareAtEqualSamplesSharesTheSamplesOfEveryMode) {
+  const auto generated = testing::run_visproxy("generate hairball --triangles 2400 -o '" + (folder_ / "hairball").string() + "'");
+  ASSERT_EQ(generated.exit_code, 0) << generated.err;
+  const std::string base = "compare '" + (folder_ / "hairball" / "hairball.json").string() +
+                           "' --seconds 0.06 --rounds 3 --reference-spp 64 --convergence-points 1 --no-count --width 24 "
+                           "--height 18 --proxy hull:32 --cache '" + (folder_ / "cache").string() + "' ";
+  const std::filesystem::path out = folder_ / "samples";
+  const auto result = testing::run_visproxy(base + "-o '" + out.string() + "' --equal samples --mode bounds --mode 'control variate learned'");
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::istringstream csv(read_file(out / "table.csv"));
+  std::string line;
+  std::getline(csv, line);
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    rows.emplace_back(1);
+    for (const char c : line) {
+      if (c == ',') rows.back().emplace_back();
+      else rows.back().back().push_back(c);
+    }
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0][0], "\"exact\"");
+  EXPECT_EQ(rows[1][0], "\"bounds\"");
+  EXPECT_EQ(rows[2][0], "\"hull:32 control variate learned\"");
+  // header: mode,proxy,seconds,samples_per_pixel,...,pass_time_over_exact(9),low,high,mse(12),efficiency,efficiency_over_exact
+  for (const auto& row : rows) {
+    ASSERT_EQ(row.size(), 15u) << line;
+    EXPECT_EQ(row[3], rows[0][3]) << row[0];  // the same passes
+    EXPECT_LE(std::stod(row[10]), std::stod(row[9])) << row[0];
+    EXPECT_GE(std::stod(row[11]), std::stod(row[9])) << row[0];
+  }
+  EXPECT_EQ(rows[0][9], "1");
+  EXPECT_EQ(rows[1][12], rows[0][12]);  // bounds: exact's image, so exact's MSE
+  EXPECT_NE(read_file(out / "table.md").find("equal samples per round"), std::string::npos);
+  const auto refused = testing::run_visproxy(base + "-o '" + (folder_ / "refused").string() + "' --mode 'eq9 optimal'");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("eq9 optimal"), std::string::npos) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(folder_ / "refused" / "table.csv"));
+}
+
 // The reference's own noise adds to every mode's MSE against it; compare estimates it from
 // the reference's two halves and subtracts it. The estimate is checked against a second,
 // independent reference (their MSE is the sum of their noises), given back with its
