@@ -226,17 +226,18 @@ struct RenderSession::State {
   int passes = 0;
   double seconds = 0;  // in the constructor and in run(), not between runs
 
-  void shade(int px, int py, int pass);
+  // One camera sample; `stats` and `answers` are the calling thread's (looked up once per
+  // range of tiles, not per sample).
+  void shade(int px, int py, int pass, RenderStats& stats, PointVisibility& answers);
 };
 
-void RenderSession::State::shade(int px, int py, int pass) {
+void RenderSession::State::shade(int px, int py, int pass, RenderStats& stats, PointVisibility& answers) {
   const std::size_t pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px);
   // Camera and light samples come from one stream, the stochastic estimators' choices
   // (terms, corrections, probe rays) from another: every visibility mode traces the same
   // segments for a seed, so images of two modes differ only by their visibility answers.
   PixelRandom random(options.seed, pixel, static_cast<std::uint64_t>(pass));
   PixelRandom choices(options.seed ^ kChoiceStream, pixel, static_cast<std::uint64_t>(pass));
-  RenderStats& stats = thread_stats.local();
   const bool counting = world.counting();
   const std::uint64_t tests_before = stats.exact_tests + stats.proxy_tests;
   const TraversalCounts counts_before = RenderWorld::thread_counts();
@@ -270,7 +271,6 @@ void RenderSession::State::shade(int px, int py, int pass) {
                            .p1_sum = &p1_sum[pixel],
                            .p1_count = &p1_count[pixel]};
   const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
-  PointVisibility& answers = *thread_visibility->local();
   answers.begin(point);
   sum[pixel] += integrator->shade(point, brdf, random, answers);
   answers.end();
@@ -321,10 +321,12 @@ int RenderSession::run(int passes, double seconds) {
   while (done < passes && s.passes < s.options.spp) {
     const int pass = s.passes;
     tbb::parallel_for(tbb::blocked_range<int>(0, tiles_x * tiles_y), [&](const tbb::blocked_range<int>& range) {
+      RenderStats& stats = s.thread_stats.local();
+      PointVisibility& answers = *s.thread_visibility->local();
       for (int t = range.begin(); t != range.end(); ++t) {
         const int x0 = (t % tiles_x) * tile, y0 = (t / tiles_x) * tile;
         for (int y = y0; y < std::min(y0 + tile, s.height); ++y)
-          for (int x = x0; x < std::min(x0 + tile, s.width); ++x) s.shade(x, y, pass);
+          for (int x = x0; x < std::min(x0 + tile, s.width); ++x) s.shade(x, y, pass, stats, answers);
       }
     });
     ++s.passes, ++done;
