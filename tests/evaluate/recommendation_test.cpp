@@ -391,5 +391,41 @@ TEST(Recommendation, TheRenderIntervalSpansTheSharesRange) {
   EXPECT_EQ(out["render_share"]["share_range"], json({0.3, 0.6}));
   testing::expect_described(out, "recommendation.schema.json");
 }
+
+// Measured on a scene, the advice weighs the render: a box that makes a shadow ray 2x
+// cheaper, in a scene whose samples spend 1 % of their time on the mesh's shadow rays,
+// gains nothing worth shipping (its render interval holds 1 once the share's rounds spread
+// it); in a scene that spends 60 % there it is shipped. Per shadow ray it is cheaper both
+// times, and the sentence says so before the render's verdict.
+TEST(Recommendation, OnASceneTheRendersFiguresDecide) {
+  auto manifest_with = [](double share, const json& range) {
+    json box = entry("box", "outside", {3000, 0, 100, 6900}, 50, 200);
+    box["measure"]["rays"]["kind"] = "scene shadow segments";
+    json m = manifest_of({box});
+    m["render_share"] = {{"share", share}, {"scene", "s.json"}, {"share_range", range}};
+    return m;
+  };
+  for (const bool busy : {false, true}) {
+    const json m = busy ? manifest_with(0.6, {0.55, 0.65}) : manifest_with(0.01, {0.0, 0.02});
+    const Recommendation r = recommend_proxies(m, as_claimed());
+    const UseFigures& f = r.proxies.at(0).uses[index_of(ProxyUse::bounds)];
+    ASSERT_TRUE(f.at_render());
+    EXPECT_GT(f.interval.lower, 1.5) << busy;  // per shadow ray: clearly cheaper
+    EXPECT_EQ(f.shown_cheaper(), busy);
+    if (!busy) {
+      EXPECT_LE(f.render_interval.lower, 1.0);
+    }
+    const json out = recommendation_json(r, m);
+    EXPECT_EQ(out["uses"]["bounds"]["beats_mesh"], busy);
+    const std::string sentence = out["uses"]["bounds"]["sentence"];
+    EXPECT_NE(sentence.find("as efficient as the mesh per shadow ray"), std::string::npos) << sentence;
+    EXPECT_EQ(sentence.find("trace the mesh") != std::string::npos, !busy) << sentence;
+    if (busy) {
+      EXPECT_NE(sentence.find("cheaper than the mesh over the render"), std::string::npos) << sentence;
+    } else {
+      EXPECT_NE(sentence.find("no gain over the render is shown"), std::string::npos) << sentence;
+    }
+  }
+}
 }  // namespace
 }  // namespace visproxy

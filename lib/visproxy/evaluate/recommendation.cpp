@@ -66,22 +66,39 @@ std::string choice_sentence(const Recommendation& r, std::size_t u, int best, in
   }
   const ProxyEfficiency& p = r.proxies[static_cast<std::size_t>(best)];
   const UseFigures& figures = p.uses[u];
-  if (figures.prediction.efficiency > 1 && figures.interval.lower > 1) {
-    text += ", " + p.name + " is predicted " + figures_text(figures) + " cheaper than the mesh at equal error";
-  } else if (figures.prediction.efficiency < 1 && figures.interval.upper < 1) {
-    text += ", no proxy is predicted cheaper than the mesh: the best, " + p.name + ", is " + figures_text(figures) +
-            " as efficient; trace the mesh";
+  const double point = figures.decisive_efficiency();
+  const Interval interval = figures.decisive_interval();
+  if (!figures.at_render()) {
+    if (figures.shown_cheaper()) {
+      text += ", " + p.name + " is predicted " + figures_text(figures) + " cheaper than the mesh at equal error";
+    } else if (point < 1 && interval.upper < 1) {
+      text += ", no proxy is predicted cheaper than the mesh: the best, " + p.name + ", is " + figures_text(figures) +
+              " as efficient; trace the mesh";
+    } else {
+      text += ", the best, " + p.name + ", is predicted " + figures_text(figures) +
+              " as efficient as the mesh: the interval holds 1, so no gain is shown; trace the mesh";
+    }
   } else {
-    text += ", the best, " + p.name + ", is predicted " + figures_text(figures) +
-            " as efficient as the mesh: the interval holds 1, so no gain is shown; trace the mesh";
+    // Over the render: the shadow ray's figure, then the render's, which decides.
+    text += ", " + (figures.shown_cheaper() ? p.name : "the best, " + p.name + ",") + " is predicted " + figures_text(figures) +
+            " as efficient as the mesh per shadow ray" + render_phrase(r, figures);
+    if (figures.shown_cheaper())
+      text += ": cheaper than the mesh over the render at equal error";
+    else if (point < 1 && interval.upper < 1)
+      text += ": no proxy is predicted to gain over the render; trace the mesh";
+    else
+      text += ": the interval holds 1, so no gain over the render is shown; trace the mesh";
   }
-  text += render_phrase(r, figures);
   if (next >= 0) {
     const ProxyEfficiency& runner = r.proxies[static_cast<std::size_t>(next)];
     const UseFigures& other = runner.uses[u];
-    if (other.interval.upper >= figures.interval.lower && figures.interval.upper >= other.interval.lower)
-      text += " (" + runner.name + ", at " + figures_text(other) + ", is not told apart from it by the intervals" +
-              (runner.primitives > p.primitives ? " and has more primitives" : "") + ")";
+    const Interval theirs = other.decisive_interval();
+    if (theirs.upper >= interval.lower && interval.upper >= theirs.lower)
+      text += " (" + runner.name + ", at " +
+              (other.at_render() ? ratio_text(other.render_efficiency) + "x [" + ratio_text(theirs.lower) + ", " +
+                                       ratio_text(theirs.upper) + "] over the render"
+                                 : figures_text(other)) +
+              ", is not told apart from it by the intervals" + (runner.primitives > p.primitives ? " and has more primitives" : "") + ")";
   }
   return text + ".";
 }
@@ -278,36 +295,28 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
     // interval (not told apart from it), the one with the fewest primitives: a choice
     // that noise cannot flip between proxies the intervals do not separate. When no proxy
     // is shown cheaper, the advice is to trace the mesh, and the most efficient is named.
-    auto shown_cheaper = [&](std::size_t i) {
-      const UseFigures& f = r.proxies[i].uses[u];
-      return f.prediction.usable && f.prediction.efficiency > 1 && f.interval.lower > 1;
-    };
+    auto shown_cheaper = [&](std::size_t i) { return r.proxies[i].uses[u].shown_cheaper(); };
+    auto lower = [&](std::size_t i) { return r.proxies[i].uses[u].decisive_interval().lower; };
+    auto upper = [&](std::size_t i) { return r.proxies[i].uses[u].decisive_interval().upper; };
+    auto point = [&](std::size_t i) { return r.proxies[i].uses[u].decisive_efficiency(); };
+    auto usable = [&](std::size_t i) { return r.proxies[i].uses[u].prediction.usable; };
     int top = -1;
     for (std::size_t i = 0; i < r.proxies.size(); ++i)
-      if (shown_cheaper(i) && (top < 0 || r.proxies[i].uses[u].interval.lower >
-                                              r.proxies[static_cast<std::size_t>(top)].uses[u].interval.lower))
-        top = static_cast<int>(i);
+      if (shown_cheaper(i) && (top < 0 || lower(i) > lower(static_cast<std::size_t>(top)))) top = static_cast<int>(i);
     if (top < 0)
-      for (std::size_t i = 0; i < r.proxies.size(); ++i) {
-        const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
-        if (candidate.usable &&
-            (top < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(top)].uses[u].prediction.efficiency))
-          top = static_cast<int>(i);
-      }
+      for (std::size_t i = 0; i < r.proxies.size(); ++i)
+        if (usable(i) && (top < 0 || point(i) > point(static_cast<std::size_t>(top)))) top = static_cast<int>(i);
     int best = top, next = -1;
     if (top >= 0) {
-      const double reach = r.proxies[static_cast<std::size_t>(top)].uses[u].interval.lower;
+      const double reach = lower(static_cast<std::size_t>(top));
       for (std::size_t i = 0; i < r.proxies.size() && shown_cheaper(static_cast<std::size_t>(top)); ++i) {
-        const ProxyEfficiency& candidate = r.proxies[i];
-        if (!shown_cheaper(i) || candidate.uses[u].interval.upper < reach) continue;
-        if (candidate.primitives < r.proxies[static_cast<std::size_t>(best)].primitives) best = static_cast<int>(i);
+        if (!shown_cheaper(i) || upper(i) < reach) continue;
+        if (r.proxies[i].primitives < r.proxies[static_cast<std::size_t>(best)].primitives) best = static_cast<int>(i);
       }
       // The runner-up: the most efficient other proxy.
       for (std::size_t i = 0; i < r.proxies.size(); ++i) {
-        const UsePrediction& candidate = r.proxies[i].uses[u].prediction;
-        if (static_cast<int>(i) == best || !candidate.usable) continue;
-        if (next < 0 || candidate.efficiency > r.proxies[static_cast<std::size_t>(next)].uses[u].prediction.efficiency)
-          next = static_cast<int>(i);
+        if (static_cast<int>(i) == best || !usable(i)) continue;
+        if (next < 0 || point(i) > point(static_cast<std::size_t>(next))) next = static_cast<int>(i);
       }
     }
     r.choices[u] = {kProxyUses[u], best, choice_sentence(r, u, best, next)};
@@ -325,7 +334,7 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
       object["proxy"] = p.name;
       object["efficiency"] = number_or_null(p.uses[u].prediction.efficiency);
       object["interval"] = {number_or_null(p.uses[u].interval.lower), number_or_null(p.uses[u].interval.upper)};
-      object["beats_mesh"] = p.uses[u].prediction.efficiency > 1 && p.uses[u].interval.lower > 1;
+      object["beats_mesh"] = p.uses[u].shown_cheaper();
       if (!std::isnan(p.uses[u].render_efficiency)) {
         object["render_efficiency"] = number_or_null(p.uses[u].render_efficiency);
         object["render_interval"] = {number_or_null(p.uses[u].render_interval.lower),

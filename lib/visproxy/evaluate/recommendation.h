@@ -32,6 +32,15 @@ struct UseFigures {
   /// `interval`'s ends carried to the render, with the noise ratio's own 95 % interval and
   /// the render share's range over its timed rounds.
   Interval render_interval;
+
+  /// Whether the figures reach the render (measured on a scene). The choice of proxy and
+  /// the advice weigh the render's figures then, the shadow ray's otherwise: a proxy that
+  /// halves a shadow ray's cost gains nothing where shadow rays take no time.
+  bool at_render() const { return !std::isnan(render_efficiency); }
+  double decisive_efficiency() const { return at_render() ? render_efficiency : prediction.efficiency; }
+  Interval decisive_interval() const { return at_render() ? render_interval : interval; }
+  /// Usable, and predicted more efficient than the mesh with its whole interval above 1.
+  bool shown_cheaper() const { return prediction.usable && decisive_efficiency() > 1 && decisive_interval().lower > 1; }
 };
 
 struct ProxyEfficiency {
@@ -45,8 +54,9 @@ struct ProxyEfficiency {
 
 struct UseChoice {
   ProxyUse use = ProxyUse::control_variate;
-  /// Index into Recommendation::proxies of the proxy chosen: of those shown cheaper than the
-  /// mesh, the one whose interval's lower end is highest (or, among those its interval does
+  /// Index into Recommendation::proxies of the proxy chosen, by the decisive figures (over
+  /// the render when measured on a scene): of those shown cheaper than the mesh, the one
+  /// whose interval's lower end is highest (or, among those its interval does
   /// not tell apart from it, the one with the fewest primitives); when none is shown
   /// cheaper, the most efficient usable one. -1 when none is usable (no proxy measured,
   /// costs not timed, no proved proxy for bounds).

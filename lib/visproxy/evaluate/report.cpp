@@ -477,9 +477,16 @@ std::vector<ShippingLine> shipping_lines(const ReportFigures& figures, const jso
     if (p)
       for (const json& e : manifest.at("proxies"))
         if (e.value("name", std::string()) == p->name) entry = &e;
-    if (!p || !entry || !(f->prediction.efficiency > 1 && f->interval.lower > 1)) {
-      line.text = use + ", keep the mesh: no proxy is shown cheaper than it" +
-                  (p ? std::string(" (the best, ") + p->name + ", is predicted " + format("%#.3g", f->prediction.efficiency) + "x)" : "") + ".";
+    if (!p || !entry || !f->shown_cheaper()) {
+      std::string best;
+      if (p) {
+        best = " (the best, " + p->name + ", is predicted " + format("%#.3g", f->prediction.efficiency) + "x";
+        if (f->at_render())
+          best += " per shadow ray and " + format("%#.3g", f->render_efficiency) + "x [" + format("%#.3g", f->render_interval.lower) +
+                  ", " + format("%#.3g", f->render_interval.upper) + "] over the render";
+        best += ")";
+      }
+      line.text = use + ", keep the mesh: no proxy is shown cheaper than it" + (f && f->at_render() ? " over the render" : "") + best + ".";
       lines.push_back(std::move(line));
       continue;
     }
