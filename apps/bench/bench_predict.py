@@ -13,8 +13,9 @@ For each scene (one proxied mesh, possibly instanced many times), R times over:
      exact's in the same round (the median round's ratio, which the machine's pauses do
      not move).
 It prints, per scene and use, the predictions (median, and the widest interval over the
-runs) against the measured ratios (median and range over the runs), and whether every
-measured ratio lies inside the predicted interval and within 25 % of the prediction.
+runs) against the measured ratios (median and range over the runs), whether every
+measured ratio lies inside the predicted interval and within 25 % of the prediction, and
+the report's advice in each run (the proxy it ships, or trace the mesh).
 
 Uses and the modes that realise them:
   bounds           <-> "bounds" (the first outside proxy the instance names; scenes whose
@@ -115,6 +116,7 @@ def main():
         first = specs[0]
         outside = next((s for s in specs if s.split(":")[0] in ("aabb", "obb", "hull", "wrap", "outer")), None)
         predicted = {use: [] for use, _ in USES}
+        advice = {use: [] for use, _ in USES}
         measured = {use: [] for use, _ in USES}
         share = []
         reference = os.path.join(work, label, "reference.pfm")
@@ -126,6 +128,9 @@ def main():
             recommendation = json.load(open(os.path.join(folder, "recommendation.json")))
             share.append(recommendation["render_share"]["share"])
             by_name = {p["name"]: p for p in recommendation["proxies"]}
+            for use, _ in USES:
+                chosen = recommendation["uses"].get(use, {})
+                advice[use].append(chosen.get("proxy") if chosen.get("beats_mesh") else "trace the mesh")
             for use, _ in USES:
                 spec = outside if use == "bounds" else first
                 figures = by_name.get(proxy_name(spec), {}).get(use, {}) if spec else {}
@@ -149,7 +154,7 @@ def main():
                     measured[use].append(float(modes[name]["efficiency_over_exact"]))
         for use, _ in USES:
             spec = outside if use == "bounds" else first
-            rows.append((label, use, spec or "-", share, predicted[use], measured[use]))
+            rows.append((label, use, spec or "-", share, predicted[use], measured[use], advice[use]))
 
     print("\nPredicted against measured efficiency over exact, whole render, %d runs each (measure --scene + report, "
           "then compare at equal samples, exact's pace for %.1f s per mode).\nshare: the mesh's shadow tests' share of a sample's time; ray: the "
@@ -159,7 +164,7 @@ def main():
     print("%-15s %-16s %-12s %-18s %-18s %-30s %-18s %-6s %-5s" % ("scene", "use", "proxy", "share", "ray", "render [interval]",
                                                                  "measured", "inside", "25 %"))
     inside_count = within_count = total = 0
-    for label, use, spec, share, predicted, measured in rows:
+    for label, use, spec, share, predicted, measured, advised in rows:
         if not predicted or not measured:
             print("%-15s %-16s %-12s %s" % (label, use, spec, "not usable or not rendered (see log.txt)"))
             continue
@@ -175,6 +180,10 @@ def main():
             label, use, spec, spread([100 * s for s in share]) + " %", spread([p[2] for p in predicted]),
             "%.2f [%.2f, %.2f]" % (point, low, high), spread(measured), "yes" if inside else "no",
             "yes" if within else "no"))
+        if advised:
+            names = sorted(set(advised), key=advised.index)
+            print("%-15s %-16s report's advice over the runs: %s" % (
+                "", "", ", ".join("%s x%d" % (n, advised.count(n)) for n in names)))
     print("\n%d of %d (scene, use) pairs inside their interval, %d within 25 %%. Work folder: %s" % (
         inside_count, total, within_count, work))
 
