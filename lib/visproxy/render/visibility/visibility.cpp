@@ -21,7 +21,7 @@ void ExactConnections::begin(const RenderWorld& world, const Vertex& from, unsig
   world_ = &world;
   from_ = from;
   bits_ = bits;
-  from_shells_ = world.convex_shells_holding(from);
+  shells_known_ = false;
   own_hit_ = nullptr, own_bit_ = 0;
 }
 

@@ -138,6 +138,7 @@ class ExactConnections {
   /// convex shell does not hold both ends. `end_shells`, if known, is
   /// convex_shells_holding(end).
   unsigned lane(const Vertex& end, const unsigned* end_shells = nullptr) const {
+    if (!shells_known_) from_shells_ = world_->convex_shells_holding(from_), shells_known_ = true;
     unsigned bits = bits_ & ~(from_shells_ & (end_shells ? *end_shells : world_->convex_shells_holding(end)));
     if ((bits & own_bit_) != 0 && own_hit_->own_mesh_clear_of(from_, end)) bits &= ~own_bit_;
     return bits;
@@ -153,7 +154,11 @@ class ExactConnections {
  private:
   const RenderWorld* world_ = nullptr;
   Vertex from_ = Vertex::Zero();
-  unsigned bits_ = 0x7FFFFFFFu, from_shells_ = 0;
+  unsigned bits_ = 0x7FFFFFFFu;
+  // The convex shells holding `from_`, found when a first connection asks (a point whose
+  // integrator traces only segments to lights never does).
+  mutable unsigned from_shells_ = 0;
+  mutable bool shells_known_ = false;
   const SurfaceHit* own_hit_ = nullptr;
   unsigned own_bit_ = 0;
   std::vector<unsigned> lanes_;
