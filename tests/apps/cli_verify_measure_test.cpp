@@ -283,6 +283,9 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
     EXPECT_EQ(measured.at("rays").at("instances_of_mesh"), 1);
     const auto counts = measured.at("counts").get<std::vector<std::uint64_t>>();
     EXPECT_EQ(counts[0] + counts[1] + counts[2] + counts[3], 20000u);
+    // Not verified yet: bounds cannot use the proxy, and its render is not timed.
+    EXPECT_FALSE(measured.at("render_time").contains("bounds")) << entry.at("name");
+    EXPECT_TRUE(measured.at("render_time").contains("eq8")) << entry.at("name");
     EXPECT_EQ(counts[1], 0u);     // outside proxies: nothing the bunny blocks gets past them
     EXPECT_GT(counts[0], 100u);   // the bunny does shadow part of the box
   }
@@ -334,7 +337,33 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
                                   "' --rays 20000 --timed-rays 1000")
                 .exit_code,
             0);
+  // Each proxy's render passes, timed in turns with exact's: bounds only now that verify
+  // has proved the outside claims (the first measure ran before verify), eq. 8 always; the
+  // report's render figure for those uses then takes the timed passes.
+  {
+    const json timed = json::parse(read_file(folder / "manifest.json"));
+    for (const json& entry : timed.at("proxies")) {
+      const json& times = entry.at("measure").at("render_time");
+      EXPECT_EQ(times.at("rounds"), 6);
+      for (const char* use : {"bounds", "eq8"}) {
+        ASSERT_TRUE(times.contains(use)) << entry.at("name") << " " << use;
+        const double t = times.at(use).at("pass_time_over_exact").get<double>();
+        EXPECT_GT(t, 0.0);
+        EXPECT_LE(times.at(use).at("range").at(0).get<double>(), t);
+        EXPECT_GE(times.at(use).at("range").at(1).get<double>(), t);
+      }
+    }
+    testing::expect_matches_schema(timed);
+  }
   ASSERT_EQ(testing::run_visproxy("report '" + folder.string() + "' --no-pictures").exit_code, 0);
+  {
+    const json advice = json::parse(read_file(folder / "recommendation.json"));
+    for (const json& p : advice.at("proxies"))
+      for (const char* use : {"bounds", "eq8"}) {
+        EXPECT_EQ(p.at(use).at("render_timed"), true) << p.at("name") << " " << use;
+      }
+    EXPECT_NE(advice.at("uses").at("bounds").at("sentence").get<std::string>().find("its render passes timed"), std::string::npos);
+  }
   EXPECT_NE(read_file(folder / "report.md").find("Predicted on 20000 shadow rays of the scene"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(folder / "pictures"));
   // The knot is not in the Cornell box.

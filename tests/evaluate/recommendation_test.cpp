@@ -427,5 +427,54 @@ TEST(Recommendation, OnASceneTheRendersFiguresDecide) {
     }
   }
 }
+
+// With the render's own passes timed against exact's (render_time), the render figure is
+// 1 / (noise ratio x time ratio) and its interval spans the rounds' range: bounds, which add
+// no noise, at 1 / time; a proxy 1.5x cheaper per shadow ray whose render passes took 1.05x
+// exact's is not advised. A range edited by hand to leave out the median is widened to hold
+// it; a use without a timed pass keeps the share's model.
+TEST(Recommendation, TimedRenderPassesReplaceTheSharesModel) {
+  auto manifest_with = [](const json& time) {
+    json box = entry("box", "outside", {3000, 0, 100, 6900}, 50, 200);
+    box["measure"]["rays"]["kind"] = "scene shadow segments";
+    box["measure"]["rays"]["instances_of_mesh"] = 1;
+    box["measure"]["render_noise"] = {{"segments_by_type", {3000, 0, 100, 6900}},
+                                      {"squared_contribution_by_type", {0.05, 0.0, 0.04, 0.2}},
+                                      {"squared_contribution_squares_by_type", {0.01, 0.0, 0.01, 0.05}}};
+    box["measure"]["render_time"] = {{"rounds", 6}, {"width", 128}, {"height", 96}, {"bounds", time}};
+    json m = manifest_of({box});
+    m["render_share"] = {{"share", 0.5}, {"scene", "s.json"}, {"share_range", {0.45, 0.55}}};
+    m["render_share"]["noise"] = {{"camera_samples", 40000},
+                                  {"exact_variance_per_sample", 0.5},
+                                  {"standard_error", 0.005},
+                                  {"own_instances_squared_contribution_by_type", {0.0, 0.0, 0.0, 0.0}},
+                                  {"own_instances_squared_contribution_squares_by_type", {0.0, 0.0, 0.0, 0.0}},
+                                  {"own_instances_segments_by_type", {0, 0, 0, 0}}};
+    return m;
+  };
+  const json m = manifest_with({{"pass_time_over_exact", 1.05}, {"range", {1.02, 1.09}}});
+  const Recommendation r = recommend_proxies(m, as_claimed());
+  const UseFigures& bounds = r.proxies.at(0).uses[index_of(ProxyUse::bounds)];
+  EXPECT_GT(bounds.interval.lower, 1.5);  // per shadow ray: far cheaper
+  EXPECT_TRUE(bounds.render_timed);
+  EXPECT_NEAR(bounds.render_efficiency, 1 / 1.05, 1e-12);
+  EXPECT_NEAR(bounds.render_interval.lower, 1 / 1.09, 1e-12);
+  EXPECT_NEAR(bounds.render_interval.upper, 1 / 1.02, 1e-12);
+  EXPECT_FALSE(bounds.shown_cheaper());
+  const json out = recommendation_json(r, m);
+  EXPECT_EQ(out["uses"]["bounds"]["beats_mesh"], false);
+  EXPECT_NE(out["uses"]["bounds"]["sentence"].get<std::string>().find("its render passes timed against exact's"), std::string::npos);
+  EXPECT_EQ(out["proxies"][0]["bounds"]["render_timed"], true);
+  EXPECT_EQ(out["proxies"][0]["control_variate"]["render_timed"], false);  // not timed: the share's model
+  testing::expect_described(out, "recommendation.schema.json");
+  // Faster passes: shipped.
+  EXPECT_TRUE(recommend_proxies(manifest_with({{"pass_time_over_exact", 0.8}, {"range", {0.78, 0.83}}}), as_claimed())
+                  .proxies.at(0).uses[index_of(ProxyUse::bounds)].shown_cheaper());
+  // Edited so that the range leaves out the median.
+  const UseFigures edited = recommend_proxies(manifest_with({{"pass_time_over_exact", 1.2}, {"range", {0.9, 1.0}}}), as_claimed())
+                                .proxies.at(0).uses[index_of(ProxyUse::bounds)];
+  EXPECT_NEAR(edited.render_interval.lower, 1 / 1.2, 1e-12);
+  EXPECT_NEAR(edited.render_interval.upper, 1 / 0.9, 1e-12);
+}
 }  // namespace
 }  // namespace visproxy

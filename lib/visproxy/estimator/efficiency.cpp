@@ -243,4 +243,9 @@ Interval efficiency_interval(ProxyUse use, ProxyKind proved, const RayTypeCounts
   return {low_values[lower], high_values[upper]};
 }
 
+double render_efficiency_timed(double time_ratio, double render_variance_ratio) {
+  if (!(render_variance_ratio > 0) || std::isinf(render_variance_ratio) || !(time_ratio > 0)) return 0;
+  return 1 / (render_variance_ratio * time_ratio);
+}
+
 }  // namespace visproxy

@@ -126,6 +126,11 @@ double render_variance_ratio(const std::array<double, 4>& weighted, const std::a
 /// of a sample's time the mesh's shadow tests take. 0 for an unbounded variance ratio.
 double render_efficiency_of(double cost_ratio, double render_variance_ratio, double share);
 
+/// The render's efficiency over exact's from the render's own time with the use over
+/// exact's (a pass's, timed against exact's) and its variance ratio: 1 / (variance ratio x
+/// time ratio). 0 for an infinite or non-positive variance ratio or a non-positive time.
+double render_efficiency_timed(double time_ratio, double render_variance_ratio);
+
 struct Interval {
   double lower = 0;
   double upper = 0;

@@ -14,6 +14,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/folder/proxy_folder.h"
+#include "visproxy/folder/verdict.h"
 #include "visproxy/measure/cost_model.h"
 #include "visproxy/measure/random_lines.h"
 #include "visproxy/render/renderer.h"
@@ -217,6 +218,86 @@ json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_s
           {"mesh_ns_per_shadow_ray", median(mesh_ns)},
           {"share", share},
           {"share_range", {low, high}}};
+}
+
+// The render's time per pass with each use of a proxy, over exact's: the mesh's instances
+// given the proxy as their stochastic proxy, and as their outside or inside proxy when
+// `proved` (verify proved that claim for these very files; else bounds is not timed, as
+// the report cannot advise it), the scene rendered as render_share renders it (one thread,
+// at most 128 pixels on the longer side). Each round renders one pass of exact and one of
+// each use, in turns, after a round that warms the caches; per use, the median round's
+// ratio and the least and greatest rounds'. The work before a render's first pass (eq. 8's
+// optimal probabilities) is not a sample's and is left out. What the renderer spends per
+// sample beyond the shadow rays' cost (a second query where the proxies decide nothing,
+// the point's set-up) is in these times, and not in render_share's model.
+json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, const InstanceProxy& proxy, int rounds,
+                      std::uint64_t seed) {
+  const Camera camera = scene.camera;
+  struct Restore {
+    Scene& scene;
+    const Camera& camera;
+    ~Restore() { scene.camera = camera; }
+  } restore{scene, camera};
+  const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
+  scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
+  scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  std::vector<MeshProxies> proxies(scene.instances.size());
+  const bool bounds = proxy.proved && proxy.kind != ProxyKind::general;
+  for (std::size_t i = 0; i < proxies.size(); ++i) {
+    if (!mesh_instance[i]) continue;
+    proxies[i].stochastic = proxy;
+    if (bounds) (proxy.kind == ProxyKind::outside ? proxies[i].outside : proxies[i].inside) = proxy;
+  }
+  const RenderWorld world(scene, proxies);
+  RenderOptions exact;
+  exact.spp = rounds + 1;
+  exact.seed = seed;
+  std::vector<std::pair<std::string, RenderOptions>> uses;
+  if (bounds) {
+    RenderOptions o = exact;
+    o.visibility = VisibilityMode::bounds;
+    uses.emplace_back("bounds", o);
+  }
+  {
+    RenderOptions o = exact;
+    o.visibility = VisibilityMode::stochastic;
+    o.probabilities = ProbabilityMode::optimal;
+    uses.emplace_back("eq8", o);
+  }
+  std::vector<std::vector<double>> ratios(uses.size());
+  {
+    const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    RenderSession reference(scene, world, exact);
+    std::vector<RenderSession> sessions;
+    for (const auto& [name, options] : uses) sessions.emplace_back(scene, world, options);
+    for (int round = 0; round <= rounds; ++round) {
+      auto pass_seconds = [](RenderSession& session) {
+        const double before = session.seconds();
+        session.run(1);
+        return session.seconds() - before;
+      };
+      const double exact_seconds = pass_seconds(reference);
+      for (std::size_t u = 0; u < uses.size(); ++u) {
+        const double seconds = pass_seconds(sessions[u]);
+        if (round > 0 && exact_seconds > 0) ratios[u].push_back(seconds / exact_seconds);  // the first round warms the caches
+      }
+    }
+  }
+  json out = {{"description",
+               "per use, a render pass's time over an exact pass's in the same round (one thread, the scene's camera at "
+               "most 128 pixels on the longer side, direct light, one shadow ray per sample): the median round's, and the "
+               "least and greatest rounds' (range); bounds only for a proxy whose claim verify proved"},
+              {"rounds", rounds},
+              {"width", scene.camera.width},
+              {"height", scene.camera.height}};
+  for (std::size_t u = 0; u < uses.size(); ++u) {
+    std::vector<double> r = ratios[u];
+    if (r.empty()) continue;
+    std::sort(r.begin(), r.end());
+    const double median = r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
+    out[uses[u].first] = {{"pass_time_over_exact", median}, {"range", {r.front(), r.back()}}};
+  }
+  return out;
 }
 
 // What the render's noise is made of, for predicting each use's noise over the whole
@@ -456,6 +537,11 @@ json measure_proxies(const TriangleMesh& mesh, json manifest, const ProxyGeometr
     json measured = measurement_json(measurement);
     measured["cost_ns_per_ray"]["work"] = work_json(proxy_work.back());
     if (noise) measured["render_noise"] = proxy_render_noise(*noise, proxy_scene);
+    if (scene && timed) {
+      const bool proved = entry.contains("verify") && verdict_proves(entry["verify"], entry, mesh, geometry);
+      const InstanceProxy proxy{entry_kind(entry), entry.value("spec", std::string()), geometry.mesh, geometry.spheres, proved};
+      measured["render_time"] = use_render_times(*scene, mesh_instance, proxy, std::max(options.timing.blocks, 1), options.seed);
+    }
     measured["rays"] = std::move(proxy_rays);
     measured["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     entry["measure"] = std::move(measured);

@@ -38,7 +38,8 @@ nlohmann::json ray_set_json(const TriangleMesh& mesh, const MeasureOptions& opti
 ///   rays (count, seed), counts [n1, n2, n3, n4], f_hit / f_miss / v_avg / gssa_ratio
 ///   {value, lower, upper} (95 %), probabilities {form, p1, p2, p3}, variance {optimal,
 ///   equal}, rays_contradicting_claim, cost_ns_per_ray {proxy, mesh, estimator,
-///   proxy_over_mesh, proxy_over_mesh_range, timing_blocks, work, predicted}, seconds; and
+///   proxy_over_mesh, proxy_over_mesh_range, timing_blocks, work, predicted}, seconds, with a
+///   scene render_noise and render_time (each use's render pass time over exact's); and
 ///   at the top, cost_model (the run's model of a ray's cost from its counted work:
 ///   measure/cost_model.h) and, with a scene, render_share (the share of a render sample's
 ///   time the mesh's shadow tests take), or no render_share without one.

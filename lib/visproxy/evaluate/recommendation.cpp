@@ -47,7 +47,8 @@ std::string render_phrase(const Recommendation& r, const UseFigures& figures) {
     std::snprintf(share, sizeof share, "%.1f %%", 100 * r.render_share);
   return "; over the render of " + r.render_scene + ", whose samples spend " + share +
          " of their time testing shadow rays against the mesh, " + ratio_text(figures.render_efficiency) + "x [" +
-         ratio_text(figures.render_interval.lower) + ", " + ratio_text(figures.render_interval.upper) + "]";
+         ratio_text(figures.render_interval.lower) + ", " + ratio_text(figures.render_interval.upper) + "]" +
+         (figures.render_timed ? " (its render passes timed against exact's)" : "");
 }
 
 namespace {
@@ -271,11 +272,27 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
               const double at_end = efficiency > 0 && ratio > 0 && std::isfinite(ratio) ? 1 / (efficiency * ratio) : ray_cost_ratio;
               return ray_cost_ratio > 0 ? at_end * cost_ratio / ray_cost_ratio : cost_ratio;
             };
-            figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
-            figures.render_interval = over_shares([&](double share) {
-              return Interval{render_efficiency_of(cost_at(figures.interval.lower), render.high, share),
-                              render_efficiency_of(cost_at(figures.interval.upper), render.low, share)};
-            });
+            const json* timed = nullptr;
+            if (const auto times = measured.find("render_time"); times != measured.end() && times->is_object())
+              if (const auto t = times->find(std::string(use_key(kProxyUses[u]))); t != times->end() && t->is_object())
+                timed = &*t;
+            if (timed) {
+              // The render's own time with the use, timed in turns with exact's: it holds
+              // what the renderer spends beyond the shadow rays' cost, which the share's
+              // model leaves out. The interval spans the rounds' range.
+              const double time = timed->at("pass_time_over_exact").get<double>();
+              const double low = std::min(time, timed->at("range").at(0).get<double>());
+              const double high = std::max(time, timed->at("range").at(1).get<double>());
+              figures.render_efficiency = render_efficiency_timed(time, render.ratio);
+              figures.render_timed = true;
+              figures.render_interval = {render_efficiency_timed(high, render.high), render_efficiency_timed(low, render.low)};
+            } else {
+              figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
+              figures.render_interval = over_shares([&](double share) {
+                return Interval{render_efficiency_of(cost_at(figures.interval.lower), render.high, share),
+                                render_efficiency_of(cost_at(figures.interval.upper), render.low, share)};
+              });
+            }
           } else {
             figures.render_efficiency = render_efficiency(figures.prediction.efficiency, ratio, r.render_share);
             figures.render_interval = over_shares([&](double share) {
@@ -359,6 +376,7 @@ json recommendation_json(const Recommendation& r, const json& manifest) {
         if (!std::isnan(f.render_efficiency)) {
           figures["render_efficiency"] = number_or_null(f.render_efficiency);
           figures["render_interval"] = {number_or_null(f.render_interval.lower), number_or_null(f.render_interval.upper)};
+          figures["render_timed"] = f.render_timed;
         }
         if (kProxyUses[u] == ProxyUse::control_variate)
           figures["setting"] = {{"after_miss", f.prediction.setting.correction.after_miss},

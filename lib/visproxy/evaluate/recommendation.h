@@ -32,6 +32,9 @@ struct UseFigures {
   /// `interval`'s ends carried to the render, with the noise ratio's own 95 % interval and
   /// the render share's range over its timed rounds.
   Interval render_interval;
+  /// The render figure takes the render's own time with the use, timed against exact's
+  /// (the proxy's render_time), in place of the share's model.
+  bool render_timed = false;
 
   /// Whether the figures reach the render (measured on a scene). The choice of proxy and
   /// the advice weigh the render's figures then, the shadow ray's otherwise: a proxy that
