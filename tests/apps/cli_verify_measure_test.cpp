@@ -338,14 +338,15 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
                 .exit_code,
             0);
   // Each proxy's render passes, timed in turns with exact's: bounds only now that verify
-  // has proved the outside claims (the first measure ran before verify), eq. 8 always; the
+  // has proved the outside claims (the first measure ran before verify), eq. 8 and the
+  // learned control variate always; the
   // report's render figure for those uses then takes the timed passes.
   {
     const json timed = json::parse(read_file(folder / "manifest.json"));
     for (const json& entry : timed.at("proxies")) {
       const json& times = entry.at("measure").at("render_time");
       EXPECT_EQ(times.at("rounds"), 6);
-      for (const char* use : {"bounds", "eq8"}) {
+      for (const char* use : {"bounds", "eq8", "control_variate"}) {
         ASSERT_TRUE(times.contains(use)) << entry.at("name") << " " << use;
         const double t = times.at(use).at("pass_time_over_exact").get<double>();
         EXPECT_GT(t, 0.0);
@@ -359,7 +360,7 @@ TEST_F(CliVerifyMeasure, MeasureOnSceneShadowSegments) {
   {
     const json advice = json::parse(read_file(folder / "recommendation.json"));
     for (const json& p : advice.at("proxies"))
-      for (const char* use : {"bounds", "eq8"}) {
+      for (const char* use : {"bounds", "eq8", "control_variate"}) {
         EXPECT_EQ(p.at(use).at("render_timed"), true) << p.at("name") << " " << use;
       }
     EXPECT_NE(advice.at("uses").at("bounds").at("sentence").get<std::string>().find("its render passes timed"), std::string::npos);

@@ -466,6 +466,17 @@ TEST(Recommendation, TimedRenderPassesReplaceTheSharesModel) {
   EXPECT_NE(out["uses"]["bounds"]["sentence"].get<std::string>().find("its render passes timed against exact's"), std::string::npos);
   EXPECT_EQ(out["proxies"][0]["bounds"]["render_timed"], true);
   EXPECT_EQ(out["proxies"][0]["control_variate"]["render_timed"], false);  // not timed: the share's model
+  // The learned control variate, timed: its noise lies between exact's (where it traces the
+  // mesh alone) and the optimal probabilities' (the point), and its interval reaches both.
+  {
+    json cv = m;
+    cv["proxies"][0]["measure"]["render_time"]["control_variate"] = {{"pass_time_over_exact", 1.02}, {"range", {1.0, 1.04}}};
+    const UseFigures f = recommend_proxies(cv, as_claimed()).proxies.at(0).uses[index_of(ProxyUse::control_variate)];
+    EXPECT_TRUE(f.render_timed);
+    EXPECT_LT(f.render_efficiency, 1 / 1.02);  // the proxy's noise, at the optimal probabilities
+    EXPECT_NEAR(f.render_interval.upper, 1 / 1.0, 1e-12);  // exact's noise, the fastest round
+    EXPECT_LT(f.render_interval.lower, f.render_efficiency);
+  }
   testing::expect_described(out, "recommendation.schema.json");
   // Faster passes: shipped.
   EXPECT_TRUE(recommend_proxies(manifest_with({{"pass_time_over_exact", 0.8}, {"range", {0.78, 0.83}}}), as_claimed())

@@ -223,11 +223,13 @@ json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_s
 // The render's time per pass with each use of a proxy, over exact's: the mesh's instances
 // given the proxy as their stochastic proxy, and as their outside or inside proxy when
 // `proved` (verify proved that claim for these very files; else bounds is not timed, as
-// the report cannot advise it), the scene rendered as render_share renders it (one thread,
+// the report cannot advise it); eq. 8 at its optimal probabilities and the learned control
+// variate, as `render` runs them; the scene rendered as render_share renders it (one thread,
 // at most 128 pixels on the longer side). Each round renders one pass of exact and one of
 // each use, in turns, after a round that warms the caches; per use, the median round's
 // ratio and the least and greatest rounds'. The work before a render's first pass (eq. 8's
-// optimal probabilities) is not a sample's and is left out. What the renderer spends per
+// optimal probabilities, the learned control variate's costs) is not a sample's and is
+// left out. What the renderer spends per
 // sample beyond the shadow rays' cost (a second query where the proxies decide nothing,
 // the point's set-up) is in these times, and not in render_share's model.
 json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, const InstanceProxy& proxy, int rounds,
@@ -263,6 +265,13 @@ json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, cons
     o.visibility = VisibilityMode::stochastic;
     o.probabilities = ProbabilityMode::optimal;
     uses.emplace_back("eq8", o);
+  }
+  {
+    RenderOptions o = exact;
+    o.visibility = VisibilityMode::stochastic;
+    o.estimator = StochasticEstimator::control_variate;
+    o.probabilities = ProbabilityMode::learned;
+    uses.emplace_back("control_variate", o);
   }
   std::vector<std::vector<double>> ratios(uses.size());
   {

@@ -285,7 +285,11 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
               const double high = std::max(time, timed->at("range").at(1).get<double>());
               figures.render_efficiency = render_efficiency_timed(time, render.ratio);
               figures.render_timed = true;
-              figures.render_interval = {render_efficiency_timed(high, render.high), render_efficiency_timed(low, render.low)};
+              // The learned control variate traces the mesh alone wherever its proxy does not
+              // pay: its noise lies between exact's and the optimal probabilities' (the point
+              // takes the latter), and the interval reaches both.
+              const double least_noise = kProxyUses[u] == ProxyUse::control_variate ? 1.0 : render.low;
+              figures.render_interval = {render_efficiency_timed(high, render.high), render_efficiency_timed(low, least_noise)};
             } else {
               figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
               figures.render_interval = over_shares([&](double share) {
