@@ -477,6 +477,22 @@ TEST(Recommendation, TimedRenderPassesReplaceTheSharesModel) {
     EXPECT_NEAR(f.render_interval.upper, 1 / 1.0, 1e-12);  // exact's noise, the fastest round
     EXPECT_LT(f.render_interval.lower, f.render_efficiency);
   }
+  // Where it traced every timed segment exactly, its noise is exact's: 1 / time.
+  {
+    json cv = m;
+    cv["proxies"][0]["measure"]["render_time"]["control_variate"] = {
+        {"pass_time_over_exact", 1.02}, {"range", {1.0, 1.04}}, {"warm_up_passes", 16}, {"traced_exactly_share", 1.0}};
+    const UseFigures f = recommend_proxies(cv, as_claimed()).proxies.at(0).uses[index_of(ProxyUse::control_variate)];
+    EXPECT_NEAR(f.render_efficiency, 1 / 1.02, 1e-12);
+    EXPECT_NEAR(f.render_interval.lower, 1 / 1.04, 1e-12);
+    EXPECT_NEAR(f.render_interval.upper, 1 / 1.0, 1e-12);
+    // Half traced exactly: half the added noise.
+    cv["proxies"][0]["measure"]["render_time"]["control_variate"]["traced_exactly_share"] = 0.5;
+    const UseFigures half = recommend_proxies(cv, as_claimed()).proxies.at(0).uses[index_of(ProxyUse::control_variate)];
+    const UseFigures none = recommend_proxies(m, as_claimed()).proxies.at(0).uses[index_of(ProxyUse::control_variate)];
+    ASSERT_FALSE(none.render_timed);
+    EXPECT_LT(half.render_efficiency, 1 / 1.02);
+  }
   testing::expect_described(out, "recommendation.schema.json");
   // Faster passes: shipped.
   EXPECT_TRUE(recommend_proxies(manifest_with({{"pass_time_over_exact", 0.8}, {"range", {0.78, 0.83}}}), as_claimed())

@@ -273,24 +273,44 @@ json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, cons
     o.probabilities = ProbabilityMode::learned;
     uses.emplace_back("control_variate", o);
   }
+  // The learned control variate first learns: its first passes model each pixel's costs
+  // and explore, which a render of hundreds of passes spends only at its start. It is
+  // timed after kLearnedWarmUp passes, and the share of its timed segments it traced
+  // exactly is kept (the report weighs its noise by it).
+  constexpr int kLearnedWarmUp = 16;
   std::vector<std::vector<double>> ratios(uses.size());
+  double traced_exactly_share = std::nan("");
   {
     const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     RenderSession reference(scene, world, exact);
     std::vector<RenderSession> sessions;
-    for (const auto& [name, options] : uses) sessions.emplace_back(scene, world, options);
+    for (auto& [name, options] : uses) {
+      if (name == "control_variate") options.spp += kLearnedWarmUp;
+      sessions.emplace_back(scene, world, options);
+    }
+    std::vector<RenderStats> warm(uses.size());
     for (int round = 0; round <= rounds; ++round) {
-      auto pass_seconds = [](RenderSession& session) {
+      auto pass_seconds = [](RenderSession& session, int passes) {
         const double before = session.seconds();
-        session.run(1);
+        session.run(passes);
         return session.seconds() - before;
       };
-      const double exact_seconds = pass_seconds(reference);
+      const double exact_seconds = pass_seconds(reference, 1);
       for (std::size_t u = 0; u < uses.size(); ++u) {
-        const double seconds = pass_seconds(sessions[u]);
+        const bool learned = uses[u].first == "control_variate";
+        const double seconds = pass_seconds(sessions[u], round == 0 && learned ? kLearnedWarmUp : 1);
+        if (round == 0) warm[u] = sessions[u].result().stats;
         if (round > 0 && exact_seconds > 0) ratios[u].push_back(seconds / exact_seconds);  // the first round warms the caches
       }
     }
+    for (std::size_t u = 0; u < uses.size(); ++u)
+      if (uses[u].first == "control_variate") {
+        const RenderStats end = sessions[u].result().stats;
+        const double segments = static_cast<double>(end.shadow_rays - warm[u].shadow_rays);
+        if (segments > 0)
+          traced_exactly_share =
+              static_cast<double>(end.control_variate.traced_exactly - warm[u].control_variate.traced_exactly) / segments;
+      }
   }
   json out = {{"description",
                "per use, a render pass's time over an exact pass's in the same round (one thread, the scene's camera at "
@@ -305,6 +325,10 @@ json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, cons
     std::sort(r.begin(), r.end());
     const double median = r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
     out[uses[u].first] = {{"pass_time_over_exact", median}, {"range", {r.front(), r.back()}}};
+    if (uses[u].first == "control_variate" && std::isfinite(traced_exactly_share)) {
+      out[uses[u].first]["warm_up_passes"] = kLearnedWarmUp;
+      out[uses[u].first]["traced_exactly_share"] = traced_exactly_share;
+    }
   }
   return out;
 }

@@ -283,13 +283,20 @@ Recommendation recommend_proxies(const json& manifest, const ProvedKind& proved_
               const double time = timed->at("pass_time_over_exact").get<double>();
               const double low = std::min(time, timed->at("range").at(0).get<double>());
               const double high = std::max(time, timed->at("range").at(1).get<double>());
-              figures.render_efficiency = render_efficiency_timed(time, render.ratio);
-              figures.render_timed = true;
               // The learned control variate traces the mesh alone wherever its proxy does not
-              // pay: its noise lies between exact's and the optimal probabilities' (the point
-              // takes the latter), and the interval reaches both.
-              const double least_noise = kProxyUses[u] == ProxyUse::control_variate ? 1.0 : render.low;
-              figures.render_interval = {render_efficiency_timed(high, render.high), render_efficiency_timed(low, least_noise)};
+              // pay: it adds the optimal probabilities' noise on the segments it estimates
+              // only (1 - the share it traced exactly in its timed passes); without that
+              // share, its noise lies between exact's and the optimal probabilities'.
+              RenderNoiseRatio with_use = render;
+              if (kProxyUses[u] == ProxyUse::control_variate) {
+                const double exactly = timed->value("traced_exactly_share", std::nan(""));
+                const double estimated = std::isfinite(exactly) ? 1 - std::clamp(exactly, 0.0, 1.0) : 1.0;
+                auto scaled = [&](double added) { return std::isinf(added) && estimated == 0 ? 1.0 : 1 + estimated * (added - 1); };
+                with_use = {scaled(render.ratio), std::isfinite(exactly) ? scaled(render.low) : 1.0, scaled(render.high)};
+              }
+              figures.render_efficiency = render_efficiency_timed(time, with_use.ratio);
+              figures.render_timed = true;
+              figures.render_interval = {render_efficiency_timed(high, with_use.high), render_efficiency_timed(low, with_use.low)};
             } else {
               figures.render_efficiency = render_efficiency_of(cost_ratio, render.ratio, r.render_share);
               figures.render_interval = over_shares([&](double share) {
