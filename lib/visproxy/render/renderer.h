@@ -50,6 +50,7 @@ class RenderSession {
 
   /// Renders up to `passes` more passes, stopping early at options.spp in all or after the
   /// pass that crosses `seconds` of this run (0: no limit). Returns the passes it rendered.
+  /// (options.seconds is render()'s budget; a session's runs take theirs here.)
   int run(int passes, double seconds = 0);
   int passes() const;
   /// The session's own time: the work before the first pass and every run, not the time
