@@ -455,6 +455,16 @@ TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNo
     ASSERT_TRUE(stats.learned_costs.is_object()) << c.proxy.spec;
     EXPECT_GT(stats.learned_costs["noise_per_segment"].get<double>(), 0) << c.proxy.spec;
     EXPECT_EQ(stats.learned_costs["instances"].size(), 2u) << c.proxy.spec;
+    // Where no instance's proxy could pay whatever its evidence, the render is exact
+    // visibility from the first segment (no per-pixel learning): every segment traced
+    // exactly, and the proxy alone never (a p1 map of zeros).
+    EXPECT_EQ(stats.learned_costs["traced_exactly_everywhere"].get<bool>(), !c.traces_proxy) << c.proxy.spec;
+    if (!c.traces_proxy) {
+      EXPECT_EQ(stats.control_variate.traced_exactly, stats.shadow_rays) << c.proxy.spec;
+      for (const Color& p1 : b.p1_map.pixels) {
+        ASSERT_EQ(p1.x(), 0.0) << c.proxy.spec;
+      }
+    }
     double difference = 0, total = 0;
     for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
       difference += b.image.pixels[i].x() - a.image.pixels[i].x();

@@ -190,6 +190,25 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
 
 }  // namespace
 
+// Whether the learned control variate's rule could give any instance's proxy to a pixel:
+// learned_choice() at the instance's modelled costs and prior says whether any evidence
+// could make its proxy pay (can_pay: even corrected at the floor, the proxy's cost is below
+// kLearnedPaysBelow x exact's). A pixel weighs its own first segments' costs with the
+// instance's, so that where can_pay holds for no instance's average, it holds for a pixel
+// only where its own segments cost far less than the instance's do on average.
+namespace {
+
+bool any_proxy_can_pay(const VisibilityContext& context) {
+  const std::vector<ProxyKind> kinds = stochastic_kinds(context);
+  const CorrectionOptions options{.scale = context.options.correction_scale, .floor = context.options.probability_floor};
+  for (std::size_t i = 0; i < context.correction_costs.size(); ++i)
+    if (learned_choice(kinds[i], CorrectionEvidence{}, context.correction_costs[i], options, context.correction_priors[i]).can_pay)
+      return true;
+  return false;
+}
+
+}  // namespace
+
 // Everything a render keeps between passes: the per-pixel sums and the strategies' own
 // per-pixel state, so that a session continued in several runs draws and answers exactly
 // what one run of all its passes would.
@@ -215,6 +234,8 @@ struct RenderSession::State {
   VisibilityContext visibility_context;
   bool optimal = false;
   SceneCorrectionCosts correction_costs;
+  // The learned control variate where no instance's proxy can pay: exact visibility itself.
+  bool traced_exactly_everywhere = false;
   std::unique_ptr<Visibility> visibility;
   std::unique_ptr<IntegratorContext> integrator_context;
   std::unique_ptr<Integrator> integrator;
@@ -289,8 +310,12 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
     s.correction_costs = scene_correction_costs(s.visibility_context);
     s.visibility_context.correction_costs = s.correction_costs.costs;
     s.visibility_context.correction_priors = s.correction_costs.priors;
+    s.traced_exactly_everywhere = !s.correction_costs.costs.empty() && !any_proxy_can_pay(s.visibility_context);
   }
-  s.visibility = make_visibility(s.visibility_context);
+  // Where no evidence could make any instance's proxy pay at its modelled costs, every pixel
+  // would trace its segments exactly once it had modelled its own: exact visibility does so
+  // from the first segment, without the per-pixel bookkeeping.
+  s.visibility = s.traced_exactly_everywhere ? make_exact_visibility(s.visibility_context) : make_visibility(s.visibility_context);
   s.integrator_context = std::make_unique<IntegratorContext>(IntegratorContext{scene, world, s.options, s.lights});
   s.integrator = make_integrator(*s.integrator_context);
   // The VPL integrator shades with its VPLs even where no area light is left.
@@ -359,6 +384,7 @@ RenderResult RenderSession::result() const {
       const Probabilities& p = s.visibility_context.optimal[static_cast<std::size_t>(kind)];
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
+  if (s.traced_exactly_everywhere) result.stats.control_variate.traced_exactly = result.stats.exact_tests;
   const SceneCorrectionCosts& costs = s.correction_costs;
   if (!costs.costs.empty()) {
     nlohmann::json instances = nlohmann::json::array();
@@ -374,7 +400,8 @@ RenderResult RenderSession::result() const {
                            {"wrong_when_letting_through", costs.priors[i].disagreeing[0]},
                            {"wrong_when_blocking", costs.priors[i].disagreeing[1]}});
     }
-    result.stats.learned_costs = {{"noise_per_segment", costs.noise}, {"instances", instances}};
+    result.stats.learned_costs = {
+        {"noise_per_segment", costs.noise}, {"instances", instances}, {"traced_exactly_everywhere", s.traced_exactly_everywhere}};
   }
   result.stats.passes = s.passes;
   result.stats.counted = s.world.counting();
