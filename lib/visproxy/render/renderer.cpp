@@ -190,14 +190,15 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
 
 }  // namespace
 
-// Whether the learned control variate's rule could give any instance's proxy to a pixel:
-// learned_choice() at the instance's modelled costs and prior says whether any evidence
-// could make its proxy pay (can_pay: even corrected at the floor, the proxy's cost is below
-// kLearnedPaysBelow x exact's). A pixel weighs its own first segments' costs with the
-// instance's, so that where can_pay holds for no instance's average, it holds for a pixel
-// only where its own segments cost far less than the instance's do on average.
 namespace {
 
+// Whether the learned control variate's rule could give any instance's proxy to a pixel at
+// the instance's average costs: learned_choice() at its modelled costs and prior says
+// whether any evidence could make its proxy pay (can_pay: even corrected at the floor, the
+// proxy's cost is below kLearnedPaysBelow x exact's). A pixel weighs its own first
+// segments' costs with the instance's, so that where can_pay holds for no instance's
+// average, it would hold for a pixel only where its own segments cost far less than the
+// instance's do on average; the scene-level rule gives up those pixels.
 bool any_proxy_can_pay(const VisibilityContext& context) {
   const std::vector<ProxyKind> kinds = stochastic_kinds(context);
   const CorrectionOptions options{.scale = context.options.correction_scale, .floor = context.options.probability_floor};
@@ -312,9 +313,9 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
     s.visibility_context.correction_priors = s.correction_costs.priors;
     s.traced_exactly_everywhere = !s.correction_costs.costs.empty() && !any_proxy_can_pay(s.visibility_context);
   }
-  // Where no evidence could make any instance's proxy pay at its modelled costs, every pixel
-  // would trace its segments exactly once it had modelled its own: exact visibility does so
-  // from the first segment, without the per-pixel bookkeeping.
+  // Where no evidence could make any instance's proxy pay at its average modelled costs,
+  // the render traces every segment exactly: exact visibility does so from the first
+  // segment, without the per-pixel bookkeeping.
   s.visibility = s.traced_exactly_everywhere ? make_exact_visibility(s.visibility_context) : make_visibility(s.visibility_context);
   s.integrator_context = std::make_unique<IntegratorContext>(IntegratorContext{scene, world, s.options, s.lights});
   s.integrator = make_integrator(*s.integrator_context);
