@@ -19,6 +19,7 @@
 #include "visproxy/core/files.h"
 #include "visproxy/core/json_input.h"
 #include "visproxy/evaluate/plot.h"
+#include "visproxy/measure/proxy_measurement.h"
 #include "visproxy/render/scene_proxies.h"
 #include "visproxy/render/renderer.h"
 
@@ -399,18 +400,18 @@ void add_compare_command(CLI::App& app, int& exit_code) {
     }
     for (const std::string& rows : convergence_rows) convergence += rows;
     // Per mode: a pass's time over exact's in the same round, median and range over the rounds.
-    auto median = [](std::vector<double> v) {
-      std::sort(v.begin(), v.end());
-      return v.empty() ? std::nan("") : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-    };
     std::vector<std::array<double, 3>> pass_time_ratio;
     for (std::size_t m = 0; m < all_modes.size(); ++m) {
       std::vector<double> ratios;
       for (std::size_t r = 0; r < turn_seconds[m].size(); ++r)
         if (turn_passes[m][r] > 0 && turn_passes[0][r] > 0 && turn_seconds[0][r] > 0)
           ratios.push_back(turn_seconds[m][r] / turn_passes[m][r] / (turn_seconds[0][r] / turn_passes[0][r]));
-      pass_time_ratio.push_back({median(ratios), ratios.empty() ? std::nan("") : *std::min_element(ratios.begin(), ratios.end()),
-                                 ratios.empty() ? std::nan("") : *std::max_element(ratios.begin(), ratios.end())});
+      if (ratios.empty()) {
+        pass_time_ratio.push_back({std::nan(""), std::nan(""), std::nan("")});
+        continue;
+      }
+      const auto [least, most] = std::minmax_element(ratios.begin(), ratios.end());
+      pass_time_ratio.push_back({median(ratios), *least, *most});
     }
     double exact_turns = 0;
     for (const double t : turn_seconds[0]) exact_turns += t;
@@ -419,55 +420,54 @@ void add_compare_command(CLI::App& app, int& exit_code) {
       const RenderResult result = sessions[m].result();
       const double mse = mean_squared_error(result.image, reference);
       char line[512];
-      {
-        RenderStats s = result.stats;
-        // Equal samples: the mode's set-up, then exact's render time scaled by the median
-        // round's ratio (every turn renders the same passes).
-        if (equal_samples) s.seconds = setup_seconds[m] + exact_turns * (m == 0 ? 1.0 : pass_time_ratio[m][0]);
-        if (m == 0) error_white = 4 * std::sqrt(mse);  // error maps: white at 4x exact's RMS error
-        write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
-        write_png(folder / (file_stem(mode.name) + ".png"), result.image);
-        write_error_png(folder / (file_stem(mode.name) + ".error.png"), result.image, reference, error_white);
-        // The mode's own error: the MSE less the reference's noise. When that noise is most
-        // of the MSE, the reference cannot measure the mode, and efficiency is not given.
-        const double own_mse = mse - reference_noise.value_or(0.0);
-        if (reference_noise && own_mse < mse / 4)
-          std::cerr << "visproxy compare: warning: the reference's noise is " << format_number(*reference_noise / mse * 100)
-                    << " % of " << mode.name << "'s MSE: render the reference with more --reference-spp\n";
-        const double efficiency = own_mse > 0 && own_mse >= mse / 4 ? 1.0 / (own_mse * s.seconds) : std::nan("");
-        if (m == 0) exact_efficiency = efficiency;
-        // The first passes again through the counting traversal: deterministic work figures,
-        // scaled to the passes reached (every pass draws the same distribution of samples).
-        double steps = std::nan(""), primitives = std::nan("");
-        if (const RenderWorld* counting = worlds_of(mode.proxy).counting.get()) {
-          RenderOptions counted = mode.options;
-          // Learned probabilities change from pass to pass: those modes are counted in full.
-          const bool stationary = mode.options.probabilities != ProbabilityMode::learned && mode.options.probe_passes == 0;
-          counted.spp = stationary ? std::min(s.passes, o->count_passes) : s.passes;
-          counted.seconds = 0;
-          const std::string count_label = "mode " + std::to_string(m + 1) + "/" + std::to_string(all_modes.size()) + " " + mode.name +
-                                          ", counting " + std::to_string(counted.spp) + " spp";
-          if (terminal) counted.on_pass = [&](int passes, double seconds) { draw_progress(count_label, double(passes) / counted.spp, passes, seconds); };
-          const RenderResult c = render(scene, *counting, counted);
-          if (terminal) std::fprintf(stderr, "\n");
-          const double scale = static_cast<double>(s.passes) / counted.spp / pixels;
-          steps = static_cast<double>(c.stats.traversal_steps) * scale;
-          primitives = static_cast<double>(c.stats.primitive_tests) * scale;
-        }
-        const double relative = exact_efficiency > 0 ? efficiency / exact_efficiency : std::nan("");
-        // Probe rays trace both the mesh and the proxy.
-        const double exact_tests = static_cast<double>(s.exact_tests + s.probe_rays) / pixels;
-        const double proxy_tests = static_cast<double>(s.proxy_tests + s.probe_rays) / pixels;
-        const std::array<double, 3>& ratio = pass_time_ratio[m];
-        std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.3f (%.3f-%.3f) | %.4g | %.4g | %.2f |\n",
-                      mode.name.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests,
-                      steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
-        md += line;
-        std::snprintf(line, sizeof line, "\"%s\",%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g,%.6g\n",
-                      mode.name.c_str(), mode.proxy.c_str(), s.seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels,
-                      exact_tests, proxy_tests, steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
-        csv += line;
+      const RenderStats& s = result.stats;
+      // Equal samples: the mode's set-up, then exact's render time scaled by the median
+      // round's ratio (every turn renders the same passes).
+      const double mode_seconds =
+          equal_samples ? setup_seconds[m] + exact_turns * (m == 0 ? 1.0 : pass_time_ratio[m][0]) : s.seconds;
+      if (m == 0) error_white = 4 * std::sqrt(mse);  // error maps: white at 4x exact's RMS error
+      write_pfm(folder / (file_stem(mode.name) + ".pfm"), result.image);
+      write_png(folder / (file_stem(mode.name) + ".png"), result.image);
+      write_error_png(folder / (file_stem(mode.name) + ".error.png"), result.image, reference, error_white);
+      // The mode's own error: the MSE less the reference's noise. When that noise is most
+      // of the MSE, the reference cannot measure the mode, and efficiency is not given.
+      const double own_mse = mse - reference_noise.value_or(0.0);
+      if (reference_noise && own_mse < mse / 4)
+        std::cerr << "visproxy compare: warning: the reference's noise is " << format_number(*reference_noise / mse * 100)
+                  << " % of " << mode.name << "'s MSE: render the reference with more --reference-spp\n";
+      const double efficiency = own_mse > 0 && own_mse >= mse / 4 ? 1.0 / (own_mse * mode_seconds) : std::nan("");
+      if (m == 0) exact_efficiency = efficiency;
+      // The first passes again through the counting traversal: deterministic work figures,
+      // scaled to the passes reached (every pass draws the same distribution of samples).
+      double steps = std::nan(""), primitives = std::nan("");
+      if (const RenderWorld* counting = worlds_of(mode.proxy).counting.get()) {
+        RenderOptions counted = mode.options;
+        // Learned probabilities change from pass to pass: those modes are counted in full.
+        const bool stationary = mode.options.probabilities != ProbabilityMode::learned && mode.options.probe_passes == 0;
+        counted.spp = stationary ? std::min(s.passes, o->count_passes) : s.passes;
+        counted.seconds = 0;
+        const std::string count_label = "mode " + std::to_string(m + 1) + "/" + std::to_string(all_modes.size()) + " " + mode.name +
+                                        ", counting " + std::to_string(counted.spp) + " spp";
+        if (terminal) counted.on_pass = [&](int passes, double seconds) { draw_progress(count_label, double(passes) / counted.spp, passes, seconds); };
+        const RenderResult c = render(scene, *counting, counted);
+        if (terminal) std::fprintf(stderr, "\n");
+        const double scale = static_cast<double>(s.passes) / counted.spp / pixels;
+        steps = static_cast<double>(c.stats.traversal_steps) * scale;
+        primitives = static_cast<double>(c.stats.primitive_tests) * scale;
       }
+      const double relative = exact_efficiency > 0 ? efficiency / exact_efficiency : std::nan("");
+      // Probe rays trace both the mesh and the proxy.
+      const double exact_tests = static_cast<double>(s.exact_tests + s.probe_rays) / pixels;
+      const double proxy_tests = static_cast<double>(s.proxy_tests + s.probe_rays) / pixels;
+      const std::array<double, 3>& ratio = pass_time_ratio[m];
+      std::snprintf(line, sizeof line, "| %s | %.2f | %d | %.1f | %.1f | %.1f | %.0f | %.0f | %.3f (%.3f-%.3f) | %.4g | %.4g | %.2f |\n",
+                    mode.name.c_str(), mode_seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels, exact_tests, proxy_tests,
+                    steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
+      md += line;
+      std::snprintf(line, sizeof line, "\"%s\",%s,%.6g,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.10g,%.10g,%.6g\n",
+                    mode.name.c_str(), mode.proxy.c_str(), mode_seconds, s.passes, static_cast<double>(s.shadow_rays) / pixels,
+                    exact_tests, proxy_tests, steps, primitives, ratio[0], ratio[1], ratio[2], mse, efficiency, relative);
+      csv += line;
     }
     md += equal_samples
               ? "\nTime: the modes took " + std::to_string(rounds) + " turns, forwards and backwards in turn, each of the " +

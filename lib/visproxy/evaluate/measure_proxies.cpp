@@ -147,6 +147,24 @@ void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vect
       {"mesh_over_predicted", mesh / model->predict(mesh_work)}};
 }
 
+// The scene's camera made at most 128 pixels on the longer side for timed renders, and
+// given back when this goes out of scope (the scene's meshes are not copied).
+class SmallCamera {
+ public:
+  explicit SmallCamera(Scene& scene) : scene_(scene), camera_(scene.camera) {
+    const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
+    scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
+    scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  }
+  ~SmallCamera() { scene_.camera = camera_; }
+  SmallCamera(const SmallCamera&) = delete;
+  SmallCamera& operator=(const SmallCamera&) = delete;
+
+ private:
+  Scene& scene_;
+  const Camera camera_;
+};
+
 // The share of a camera sample's time that testing shadow rays against the mesh takes in
 // `scene` (Amdahl's fraction for the render-level prediction): the scene rendered as
 // `visproxy render` renders it by default (direct light, exact visibility, one shadow ray
@@ -159,16 +177,7 @@ void add_cost_model(json& manifest, const WorkPerRay& mesh_work, const std::vect
 // probability 1 - 2^-5 for any distribution of rounds).
 json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_scene, std::span<const Segment> rays,
                   const TimingOptions& timing, std::uint64_t seed) {
-  // The camera made smaller for the render, and given back (the scene's meshes are not copied).
-  const Camera camera = scene.camera;
-  struct Restore {
-    Scene& scene;
-    const Camera& camera;
-    ~Restore() { scene.camera = camera; }
-  } restore{scene, camera};
-  const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
-  scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
-  scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  const SmallCamera small(scene);
   const int rounds = std::max(timing.blocks, 1);
   RenderOptions options;
   options.spp = rounds + 1;
@@ -195,11 +204,6 @@ json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_s
       shares.push_back(std::clamp(segments / samples * ray_ns / ns, 0.0, 1.0));
     }
   }
-  auto median = [](std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-  };
   const double shadow_rays_per_sample = static_cast<double>(stats.shadow_rays) / std::max(1.0, static_cast<double>(stats.camera_samples));
   const double share = median(shares);
   const double low = shares.empty() ? 0 : *std::min_element(shares.begin(), shares.end());
@@ -229,20 +233,12 @@ json render_share(Scene& scene, const RenderWorld& world, const RayScene& mesh_s
 // each use, in turns, after a round that warms the caches; per use, the median round's
 // ratio and the least and greatest rounds'. The work before a render's first pass (eq. 8's
 // optimal probabilities, the learned control variate's costs) is not a sample's and is
-// left out. What the renderer spends per
-// sample beyond the shadow rays' cost (a second query where the proxies decide nothing,
-// the point's set-up) is in these times, and not in render_share's model.
+// left out. What the renderer spends per sample beyond the shadow rays' cost (a second
+// query where the proxies decide nothing, the point's set-up) is in these times, and not
+// in render_share's model.
 json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, const InstanceProxy& proxy, int rounds,
                       std::uint64_t seed) {
-  const Camera camera = scene.camera;
-  struct Restore {
-    Scene& scene;
-    const Camera& camera;
-    ~Restore() { scene.camera = camera; }
-  } restore{scene, camera};
-  const double scale = std::min(1.0, 128.0 / std::max(scene.camera.width, scene.camera.height));
-  scene.camera.width = std::max(1, static_cast<int>(std::lround(scene.camera.width * scale)));
-  scene.camera.height = std::max(1, static_cast<int>(std::lround(scene.camera.height * scale)));
+  const SmallCamera small(scene);
   std::vector<MeshProxies> proxies(scene.instances.size());
   const bool bounds = proxy.proved && proxy.kind != ProxyKind::general;
   for (std::size_t i = 0; i < proxies.size(); ++i) {
@@ -320,11 +316,10 @@ json use_render_times(Scene& scene, const std::vector<bool>& mesh_instance, cons
               {"width", scene.camera.width},
               {"height", scene.camera.height}};
   for (std::size_t u = 0; u < uses.size(); ++u) {
-    std::vector<double> r = ratios[u];
+    const std::vector<double>& r = ratios[u];
     if (r.empty()) continue;
-    std::sort(r.begin(), r.end());
-    const double median = r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
-    out[uses[u].first] = {{"pass_time_over_exact", median}, {"range", {r.front(), r.back()}}};
+    const auto [least, most] = std::minmax_element(r.begin(), r.end());
+    out[uses[u].first] = {{"pass_time_over_exact", median(r)}, {"range", {*least, *most}}};
     if (uses[u].first == "control_variate" && std::isfinite(traced_exactly_share)) {
       out[uses[u].first]["warm_up_passes"] = kLearnedWarmUp;
       out[uses[u].first]["traced_exactly_share"] = traced_exactly_share;

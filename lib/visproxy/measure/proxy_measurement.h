@@ -28,6 +28,9 @@ struct TimingOptions {
 /// the first options.rays rays, after one untimed pass to warm caches. 0 for no rays.
 double nanoseconds_per_ray(const RayScene& scene, std::span<const Segment> rays, const TimingOptions& options = {});
 
+/// The median of `values` (the mean of the middle two for an even count); 0 for none.
+double median(std::vector<double> values);
+
 /// One timed pass of segment_blocked over `rays` on this thread, without a warm-up: ns per
 /// ray (0 for no rays). For timings interleaved with other work.
 double nanoseconds_per_ray_once(const RayScene& scene, std::span<const Segment> rays);
