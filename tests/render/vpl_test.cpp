@@ -14,6 +14,7 @@
 #include "visproxy/core/errors.h"
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/sphere_set.h"
+#include "visproxy/render/integrators/integrator.h"
 #include "visproxy/render/renderer.h"
 #include "render/render_test_scenes.h"
 #include "visproxy/render/world/virtual_point_lights.h"
@@ -494,7 +495,9 @@ TEST(OccluderDisks, LazyDisksGiveTheImagesOfEveryDisk) {
     for (const SelfShadow self : {SelfShadow::none, SelfShadow::heuristic, SelfShadow::exact})
       for (const bool clusters : {true, false})
         for (const VisibilityMode visibility : {VisibilityMode::spheres, VisibilityMode::stochastic}) {
-          RenderOptions options{.integrator = IntegratorKind::vpl, .visibility = visibility, .probabilities = ProbabilityMode::learned,
+          // Equal probabilities: with learned ones the control variate would not pay on this
+          // crowd of cheap meshes and many balls, and the render would trace exactly.
+          RenderOptions options{.integrator = IntegratorKind::vpl, .visibility = visibility, .probabilities = ProbabilityMode::equal,
                                 .estimator = StochasticEstimator::control_variate, .spp = 2, .seed = 7, .vpls = 64, .bounces = 2};
           options.self_shadow = self, options.disk_clusters = clusters;
           options.disk_lazy_from = std::size_t{1} << 30;  // every disk at every point
@@ -572,6 +575,135 @@ void expect_lazy_disks_answer_as_every_disk_at_the_cones_edges(bool one_ball) {
 TEST(OccluderDisks, LazyDisksAnswerAsEveryDiskAtTheConesEdges) { expect_lazy_disks_answer_as_every_disk_at_the_cones_edges(false); }
 
 TEST(OccluderDisks, LazyDisksAnswerAsEveryDiskAtTheBoundsEdges) { expect_lazy_disks_answer_as_every_disk_at_the_cones_edges(true); }
+
+// The learned control variate with occluder disks decides for the whole scene, before the
+// render, whether it can pay. On the crowd (60 instances of a 642-triangle ball, 360 balls
+// made per point, 64 VPLs, far from the origin) the disks' set-up and tests cost more than
+// the meshes: the render traces every segment exactly and gives exact's image bit for bit,
+// without a disk test. Over the disk scene's finely tessellated ball (one ball of proxy) it
+// keeps the control variate, whose corrections then run.
+TEST(VplIntegrator, LearnedControlVariateTracesExactlyWhereItsDisksCannotPay) {
+  const CrowdScene c = disk_crowd(Vertex(2.0e5, -3.0e5, 1.0e4));
+  const RenderWorld world(c.scene, c.proxies);
+  RenderOptions options{.integrator = IntegratorKind::vpl, .spp = 4, .seed = 9, .vpls = 64, .bounces = 2};
+  const RenderResult exact = render(c.scene, world, options);
+  options.visibility = VisibilityMode::stochastic;
+  options.estimator = StochasticEstimator::control_variate;
+  options.probabilities = ProbabilityMode::learned;
+  const RenderResult learned = render(c.scene, world, options);
+  ASSERT_TRUE(learned.stats.disk_gate.is_object());
+  std::printf("crowd: %s\n", learned.stats.disk_gate.dump().c_str());
+  EXPECT_TRUE(learned.stats.disk_gate["traced_exactly_everywhere"].get<bool>());
+  EXPECT_GE(learned.stats.disk_gate["work_ratio"].get<double>() * learned.stats.disk_gate["variance_ratio"].get<double>(),
+            kLearnedPaysBelow);
+  EXPECT_EQ(learned.image.pixels, exact.image.pixels);
+  EXPECT_EQ(learned.stats.disks.tests, 0u);
+  EXPECT_EQ(learned.stats.exact_tests, exact.stats.exact_tests);
+  EXPECT_EQ(learned.stats.control_variate.traced_exactly, learned.stats.exact_tests);
+  EXPECT_TRUE(exact.stats.disk_gate.is_null());
+
+  const DiskScene s = disk_scene();
+  const RenderWorld ball_world(s.scene, s.proxies);
+  RenderOptions ball{.integrator = IntegratorKind::vpl, .visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
+                     .estimator = StochasticEstimator::control_variate, .spp = 8, .seed = 3, .virtual_point_lights = &s.lights};
+  const RenderResult kept = render(s.scene, ball_world, ball);
+  ASSERT_TRUE(kept.stats.disk_gate.is_object());
+  std::printf("ball: %s\n", kept.stats.disk_gate.dump().c_str());
+  EXPECT_FALSE(kept.stats.disk_gate["traced_exactly_everywhere"].get<bool>());
+  EXPECT_LT(kept.stats.disk_gate["work_ratio"].get<double>() * kept.stats.disk_gate["variance_ratio"].get<double>(), kLearnedPaysBelow);
+  EXPECT_GT(kept.stats.disks.tests, 0u);
+  EXPECT_GT(kept.stats.control_variate.after_miss + kept.stats.control_variate.after_hit, 0u);
+}
+
+// With occluder disks as V', segments to area lights are traced exactly: over the disk
+// scene lit by an area light and no VPLs, the control variate's image is exact's, bit for
+// bit, with probabilities equal or learned; with VPLs it is not (the connections are
+// estimated).
+TEST(VplIntegrator, ControlVariateTracesSegmentsToLightsExactly) {
+  DiskScene s = disk_scene();
+  s.scene.lights.push_back(square_light({-0.5, -0.5, 4}, {0, 1, 0}, {1, 0, 0}, Color::Constant(5)));
+  const RenderWorld world(s.scene, s.proxies);
+  const std::vector<VirtualPointLight> none;
+  for (const bool vpls : {false, true})
+    for (const ProbabilityMode probabilities : {ProbabilityMode::equal, ProbabilityMode::learned}) {
+      RenderOptions options{.integrator = IntegratorKind::vpl, .spp = 4, .shadow_rays = 2, .seed = 4,
+                            .virtual_point_lights = vpls ? &s.lights : &none};
+      const RenderResult exact = render(s.scene, world, options);
+      options.visibility = VisibilityMode::stochastic;
+      options.estimator = StochasticEstimator::control_variate;
+      options.probabilities = probabilities;
+      options.correction_scale = 0.25;
+      const RenderResult estimate = render(s.scene, world, options);
+      const std::string label = std::string(vpls ? "VPLs " : "no VPLs ") + std::string(name_of(probabilities));
+      if (vpls) {
+        EXPECT_NE(estimate.image.pixels, exact.image.pixels) << label;
+        EXPECT_GT(estimate.stats.disks.tests, 0u) << label;
+      } else {
+        EXPECT_EQ(estimate.image.pixels, exact.image.pixels) << label;
+        EXPECT_EQ(estimate.stats.disks.tests, 0u) << label;
+        EXPECT_GT(estimate.stats.shadow_rays, 0u) << label;
+      }
+    }
+}
+
+// What an integrator reports each segment to be worth (PointVisibility::contributions) is
+// what the segment adds to the luminance of the point's value when visible: with every
+// segment answered 0 or 1 at random, the luminance of the value is the sum of the reported
+// contributions of the segments answered 1, at 200 points of the disk scene under an area
+// light and 25 VPLs, for the direct and the VPL integrator.
+class RecordingAnswers final : public PointVisibility {
+ public:
+  void begin(const ShadingPoint&) override { answers.clear(), worth.clear(); }
+  double to_light(const Vertex&) override { return draw(); }
+  double connection(const Vertex&) override { return draw(); }
+  bool wants_contributions() const override { return true; }
+  void contributions(std::span<const double> luminance) override { worth.assign(luminance.begin(), luminance.end()); }
+  std::vector<double> answers, worth;
+
+ private:
+  double draw() {
+    answers.push_back(random_.uniform() < 0.5 ? 0.0 : 1.0);
+    return answers.back();
+  }
+  Random random_{17};
+};
+
+TEST(Integrators, ReportWhatEachSegmentIsWorth) {
+  DiskScene s = disk_scene();
+  s.scene.lights.push_back(square_light({-0.5, -0.5, 4}, {0, 1, 0}, {1, 0, 0}, Color(5, 3, 1)));
+  s.scene.instances[1].albedo = Color(0.2, 0.5, 0.8);
+  const RenderWorld world(s.scene, s.proxies);
+  const LightSampler lights(s.scene);
+  for (const IntegratorKind kind : {IntegratorKind::direct, IntegratorKind::vpl}) {
+    const RenderOptions options{.integrator = kind, .shadow_rays = 3, .virtual_point_lights = &s.lights};
+    const std::unique_ptr<Integrator> integrator = make_integrator(IntegratorContext{s.scene, world, options, lights});
+    RecordingAnswers answers;
+    RenderStats stats;
+    PixelRandom choices(1, 0, 0), random(2, 0, 0);
+    double p1_sum = 0, p1_count = 0;
+    int points = 0;
+    for (int i = 0; i < 1000 && points < 200; ++i) {
+      const double x = -3 + 6 * random.uniform(), y = -3 + 6 * random.uniform();
+      const std::optional<SurfaceHit> hit = world.intersect(Vertex(x, y, 6), Vertex(0, 0, -1));
+      if (!hit || hit->light >= 0) continue;
+      const ShadingPoint point{.pixel = 0, .pass = 0, .hit = &*hit,
+                               .position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal,
+                               .choices = &choices, .stats = &stats, .p1_sum = &p1_sum, .p1_count = &p1_count};
+      const Color brdf = s.scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
+      answers.begin(point);
+      const double value = integrator->shade(point, brdf, random, answers).mean();
+      answers.end();
+      ASSERT_EQ(answers.worth.size(), answers.answers.size()) << name_of(kind);
+      if (answers.answers.empty()) continue;  // no light or VPL in front of the point
+      ++points;
+      double sum = 0, scale = 0;
+      for (std::size_t k = 0; k < answers.worth.size(); ++k) sum += answers.answers[k] * answers.worth[k], scale += answers.worth[k];
+      EXPECT_GT(scale, 0) << name_of(kind);
+      EXPECT_NEAR(value, sum, 1e-12 * scale) << name_of(kind) << " point " << points;
+    }
+    EXPECT_EQ(points, 200) << name_of(kind);
+  }
+}
 
 // Self-shadowing (occluding-spheres §4.2), on a floor whose own sphere set is one ball of
 // radius 0.4 at height 0.5 over the point the camera sees, under a light straight above:

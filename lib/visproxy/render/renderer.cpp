@@ -5,6 +5,7 @@
 
 #include "visproxy/core/errors.h"
 #include "visproxy/render/integrators/integrator.h"
+#include "visproxy/render/visibility/occluder_disks.h"
 #include "visproxy/render/visibility/visibility.h"
 #include "visproxy/render/world/query_costs.h"
 
@@ -188,6 +189,227 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
   return result;
 }
 
+
+// ProbabilityMode::learned with the control variate and occluder disks as V' (the VPL
+// integrator with sphere sets): whether the control variate can pay on this scene at all.
+// Its corrections are chosen per pixel from the pixel's evidence alone, blind to cost, so
+// where the disks' set-up and tests cost more than the meshes they stand for, or the disks
+// disagree with the meshes often, the control variate costs more than exact visibility.
+// Before the render, kDiskGatePairs pairs of camera samples (each pair in one pixel of a
+// kDiskGateSide^2 grid over the image, seeded from the render's seed) are shaded by the
+// render's integrator with every segment traced exactly; each segment's disk answer, mesh
+// answers, modelled work and contribution (PointVisibility::contributions) are kept, and
+// segments to area lights are traced exactly, as the control variate traces them. Then:
+// - T, the exact render's variance per camera sample: sum (x_a - x_b)^2 / 2 over the pairs;
+// - the control variate's learning is replayed per pixel for min(spp, kDiskGatePasses)
+//   passes, its two samples taking turns: a pass's segments are corrected with the
+//   probabilities q the pixel's evidence gives when its point begins (as the render's
+//   groups of connections are), and the corrections it draws join the evidence. A, the
+//   variance the control variate adds per camera sample, is the mean over passes of the
+//   sum over segments the disks answer wrongly of contribution^2 (1/q - 1);
+// - modelled work (render/world/query_costs.h) per pass: exact, the camera sample plus each
+//   segment's meshes; the control variate, the camera sample, the disks' set-up
+//   (kDiskSetupWork a ball made) and tests (kDiskTestWork a comparison), the meshes traced
+//   exactly (the own instance when splitting, segments to lights), and each segment's
+//   correction times its q. The two constants make the model's time of disks alone over
+//   exact's match `visproxy-bench-vpl` on the armadillo and menagerie rooms (0.06-0.27
+//   modelled against 0.09-0.36 measured), and its control variate's (0.41-0.67 against
+//   0.40-0.68).
+// The render traces every segment exactly when (T + A) x work_cv >= kLearnedPaysBelow x T x
+// work_exact, the rule learned_choice() applies to direct light.
+constexpr std::size_t kDiskGateSide = 16;
+constexpr std::size_t kDiskGatePairs = kDiskGateSide * kDiskGateSide;
+constexpr int kDiskGatePasses = 16;
+constexpr double kDiskSetupWork = 1.5;
+constexpr double kDiskTestWork = 0.035;
+
+struct DiskGateRecord {
+  bool exact = false;  // traced exactly, as the control variate traces segments to lights
+  bool traced_blocked = false, proxy_blocked = false, mesh_blocked = false;
+  double exact_work = 0, correction_work = 0, disk_work = 0;
+  double contribution = 0;  // luminance, when visible
+};
+
+// Answers exactly, recording what the control variate would see.
+class DiskGateProbe final : public PointVisibility {
+ public:
+  DiskGateProbe(const VisibilityContext& context, const OccluderDiskIndex& index, std::vector<DiskGateRecord>& records)
+      : context_(context), index_(index), camera_(CameraRays(context.scene.camera).origin()), records_(records) {}
+  void begin(const ShadingPoint& point) override {
+    point_ = point;
+    first_ = records_.size();
+    const RenderOptions& o = context_.options;
+    const DiskPartition partition = disks_.begin(index_, *point.hit, point.position, o.split, o.self_shadow == SelfShadow::heuristic,
+                                                 o.disk_grid_from, o.disk_clusters);
+    exact_part_.begin(context_.world, point.position, partition.traced);
+    exact_part_.skip_own_where_clear(*point.hit, partition.own_alone);
+    disk_bits_ = partition.disks;
+  }
+  // As the control variate with disks answers them: segments to lights exactly.
+  double to_light(const Vertex& end) override {
+    DiskGateRecord r;
+    r.exact = true;
+    r.traced_blocked = context_.world.mesh_blocks(point_.position, end);
+    r.exact_work = r.correction_work = segment_query_costs(context_.world, camera_, point_.position, end, point_.hit->instance, false).exact;
+    records_.push_back(r);
+    return r.traced_blocked ? 0.0 : 1.0;
+  }
+  double connection(const Vertex& end) override { return segment(end); }
+  bool wants_contributions() const override { return true; }
+  void contributions(std::span<const double> luminance) override {
+    if (luminance.size() != records_.size() - first_) throw Error("render: an integrator reported contributions for other segments than it asked");
+    for (std::size_t i = 0; i < luminance.size(); ++i) records_[first_ + i].contribution = luminance[i];
+  }
+  // The disks the point made (with a lazy index, those its segments asked for).
+  std::size_t balls() const { return disks_.size(); }
+
+ private:
+  double segment(const Vertex& end) {
+    const RenderWorld& world = context_.world;
+    DiskGateRecord r;
+    const unsigned lane = exact_part_.lane(end);
+    r.traced_blocked = lane != 0 && world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = lane});
+    std::uint64_t tests = 0;
+    r.proxy_blocked = disks_.occludes(end, tests);
+    r.disk_work = kDiskTestWork * static_cast<double>(tests);
+    r.mesh_blocked = !r.traced_blocked && world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = disk_bits_});
+    const SegmentQueryCosts c = segment_query_costs(world, camera_, point_.position, end, point_.hit->instance, context_.options.split);
+    r.exact_work = c.exact, r.correction_work = c.correction;
+    records_.push_back(r);
+    return r.traced_blocked || r.mesh_blocked ? 0.0 : 1.0;
+  }
+
+  const VisibilityContext& context_;
+  const OccluderDiskIndex& index_;
+  Vertex camera_;
+  std::vector<DiskGateRecord>& records_;
+  std::size_t first_ = 0;
+  ShadingPoint point_;
+  PointDisks disks_;
+  ExactConnections exact_part_;
+  unsigned disk_bits_ = 0;
+};
+
+struct DiskGate {
+  bool weighed = false;        // some pair had noise to weigh (else the control variate is kept)
+  bool trace_exactly = false;  // the control variate cannot pay: trace every segment exactly
+  int passes = 0;              // replayed per pixel
+  double noise = 0;            // T
+  double added = 0;            // A
+  double variance_ratio = 1;   // (T + A) / T
+  double work_ratio = 1;       // work_cv / work_exact
+  double corrections = 0;      // the replayed corrections' mean probability
+
+  nlohmann::json to_json() const {
+    return {{"pairs", kDiskGatePairs},     {"passes", passes},
+            {"weighed", weighed},          {"noise_per_sample", noise},
+            {"added_variance_per_sample", added}, {"variance_ratio", variance_ratio},
+            {"work_ratio", work_ratio},    {"mean_correction_probability", corrections},
+            {"traced_exactly_everywhere", trace_exactly}};
+  }
+};
+
+DiskGate scene_disk_gate(const VisibilityContext& context) {
+  const Scene& scene = context.scene;
+  const RenderWorld& world = context.world;
+  const RenderOptions& options = context.options;
+  const OccluderDiskIndex index(world, scene.instances.size(), options.disk_lazy_from);
+  // An integrator of its own: integrators may keep per-pixel sums of what they shaded.
+  const std::unique_ptr<Integrator> integrator = make_integrator(IntegratorContext{scene, world, options, context.lights});
+  const CameraRays camera(scene.camera);
+  const Vertex eye = camera.origin();
+  std::vector<DiskGateRecord> records;
+  DiskGateProbe probe(context, index, records);
+  struct Sample {
+    bool shaded = false;
+    std::size_t first = 0, last = 0;  // its records
+    double camera_work = 0, setup_work = 0;
+  };
+  std::vector<Sample> samples(2 * kDiskGatePairs);
+  RenderStats stats;
+  double p1_sum = 0, p1_count = 0, noise = 0;
+  PixelRandom random(options.seed ^ 0x6469736B67617465ULL, 0, 0);
+  PixelRandom choices(options.seed ^ 0x63686F69636573ULL, 0, 0);
+  const int width = scene.camera.width, height = scene.camera.height;
+  // The pairs' pixels are stratified: one in each cell of a kDiskGateSide^2 grid over the image.
+  for (std::size_t pair = 0; pair < kDiskGatePairs; ++pair) {
+    const double cx = static_cast<double>(pair % kDiskGateSide), cy = static_cast<double>(pair / kDiskGateSide);
+    const int px = std::min(width - 1, static_cast<int>((cx + random.uniform()) / kDiskGateSide * width));
+    const int py = std::min(height - 1, static_cast<int>((cy + random.uniform()) / kDiskGateSide * height));
+    std::array<double, 2> value{};
+    for (std::size_t k = 0; k < 2; ++k) {
+      Sample& sample = samples[2 * pair + k];
+      const double jx = random.uniform(), jy = random.uniform();
+      const std::optional<SurfaceHit> hit = world.intersect(eye, camera.direction(px + jx, py + jy));
+      if (!hit) continue;
+      if (hit->light >= 0) {
+        const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
+        if (hit->light_front || light.two_sided) value[k] = light.radiance.mean();
+        continue;
+      }
+      const Vertex position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
+      const ShadingPoint point{.pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px),
+                               .pass = 0,
+                               .hit = &*hit,
+                               .position = position,
+                               .choices = &choices,
+                               .stats = &stats,
+                               .p1_sum = &p1_sum,
+                               .p1_count = &p1_count};
+      const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
+      sample.shaded = true;
+      sample.first = records.size();
+      probe.begin(point);
+      value[k] = integrator->shade(point, brdf, random, probe).mean();
+      probe.end();
+      sample.last = records.size();
+      sample.camera_work = segment_query_costs(world, eye, position, position, hit->instance, options.split).camera;
+      sample.setup_work = kDiskSetupWork * static_cast<double>(probe.balls());
+    }
+    noise += (value[0] - value[1]) * (value[0] - value[1]) / 2;
+  }
+  DiskGate gate;
+  if (!(noise > 0) || records.empty()) return gate;
+  gate.weighed = true;
+  const CorrectionOptions correction{.scale = options.correction_scale, .floor = options.probability_floor};
+  const int passes = std::clamp(options.spp, 1, kDiskGatePasses);
+  double work_exact = 0, work_cv = 0, added = 0, probability_sum = 0, probability_count = 0;
+  PixelRandom draws(options.seed ^ 0x7265706C6179ULL, 0, 0);
+  for (std::size_t pair = 0; pair < kDiskGatePairs; ++pair) {
+    CorrectionEvidence evidence;  // the pixel's, as the render starts it
+    for (int pass = 0; pass < passes; ++pass) {
+      const Sample& sample = samples[2 * pair + static_cast<std::size_t>(pass % 2)];
+      if (!sample.shaded) continue;
+      const CorrectionProbabilities q = correction_probabilities(ProxyKind::general, evidence, correction);
+      work_exact += sample.camera_work;
+      work_cv += sample.camera_work + sample.setup_work;
+      for (std::size_t r = sample.first; r < sample.last; ++r) {
+        const DiskGateRecord& record = records[r];
+        work_exact += record.exact_work;
+        if (record.exact) {
+          work_cv += record.exact_work;
+          continue;
+        }
+        work_cv += record.exact_work - record.correction_work + record.disk_work;
+        if (record.traced_blocked) continue;
+        const double p = record.proxy_blocked ? q.after_hit : q.after_miss;
+        work_cv += p * record.correction_work;
+        probability_sum += p, probability_count += 1;
+        if (record.proxy_blocked != record.mesh_blocked) added += record.contribution * record.contribution * (1 / p - 1);
+        if (draws.uniform() < p) evidence.add(record.proxy_blocked, record.mesh_blocked);
+      }
+    }
+  }
+  gate.passes = passes;
+  gate.noise = noise / kDiskGatePairs;
+  gate.added = added / (static_cast<double>(kDiskGatePairs) * passes);
+  gate.variance_ratio = (gate.noise + gate.added) / gate.noise;
+  gate.work_ratio = work_cv / work_exact;
+  gate.corrections = probability_count > 0 ? probability_sum / probability_count : 0.0;
+  gate.trace_exactly = !(gate.variance_ratio * gate.work_ratio < kLearnedPaysBelow);
+  return gate;
+}
+
 }  // namespace
 
 namespace {
@@ -237,6 +459,7 @@ struct RenderSession::State {
   SceneCorrectionCosts correction_costs;
   // The learned control variate where no instance's proxy can pay: exact visibility itself.
   bool traced_exactly_everywhere = false;
+  nlohmann::json disk_gate;  // what the VPL control variate's scene-level choice weighed
   std::unique_ptr<Visibility> visibility;
   std::unique_ptr<IntegratorContext> integrator_context;
   std::unique_ptr<Integrator> integrator;
@@ -313,6 +536,12 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
     s.visibility_context.correction_priors = s.correction_costs.priors;
     s.traced_exactly_everywhere = !s.correction_costs.costs.empty() && !any_proxy_can_pay(s.visibility_context);
   }
+  if (stochastic && options.probabilities == ProbabilityMode::learned && options.estimator == StochasticEstimator::control_variate &&
+      options.integrator == IntegratorKind::vpl && control_variate_uses_disks(s.visibility_context)) {
+    const DiskGate gate = scene_disk_gate(s.visibility_context);
+    s.traced_exactly_everywhere = gate.trace_exactly;
+    s.disk_gate = gate.to_json();
+  }
   // Where no evidence could make any instance's proxy pay at its average modelled costs,
   // the render traces every segment exactly: exact visibility does so from the first
   // segment, without the per-pixel bookkeeping.
@@ -386,6 +615,7 @@ RenderResult RenderSession::result() const {
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
   if (s.traced_exactly_everywhere) result.stats.control_variate.traced_exactly = result.stats.exact_tests;
+  result.stats.disk_gate = s.disk_gate;
   const SceneCorrectionCosts& costs = s.correction_costs;
   if (!costs.costs.empty()) {
     nlohmann::json instances = nlohmann::json::array();

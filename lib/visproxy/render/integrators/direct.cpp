@@ -11,7 +11,16 @@ class DirectIntegrator final : public Integrator {
   explicit DirectIntegrator(const IntegratorContext& context) : context_(context) {}
 
   Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const override {
-    return brdf.cwiseProduct(direct_light(context_, point, random, visibility)) / context_.options.shadow_rays;
+    if (!visibility.wants_contributions())
+      return brdf.cwiseProduct(direct_light(context_, point, random, visibility)) / context_.options.shadow_rays;
+    thread_local std::vector<Color> worth;
+    worth.clear();
+    const Color radiance = brdf.cwiseProduct(direct_light(context_, point, random, visibility, &worth)) / context_.options.shadow_rays;
+    thread_local std::vector<double> luminance;
+    luminance.clear();
+    for (const Color& w : worth) luminance.push_back(brdf.cwiseProduct(w).mean() / context_.options.shadow_rays);
+    visibility.contributions(luminance);
+    return radiance;
   }
 
  private:
@@ -20,7 +29,8 @@ class DirectIntegrator final : public Integrator {
 
 }  // namespace
 
-Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility) {
+Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility,
+                   std::vector<Color>* worth) {
   const LightSampler& lights = context.lights;
   RenderStats& stats = *point.stats;
   const Vertex& x = point.position;
@@ -31,6 +41,7 @@ Color direct_light(const IntegratorContext& context, const ShadingPoint& point, 
     if (!g) continue;
     ++stats.shadow_rays;
     const double v = visibility.to_light(light_end(context.world, y, x));
+    if (worth) worth->push_back((g->cos_x * g->cos_y / g->distance2 * lights.total_area()) * y.radiance);
     if (v != 0) radiance += (v * g->cos_x * g->cos_y / g->distance2 * lights.total_area()) * y.radiance;
   }
   return radiance;

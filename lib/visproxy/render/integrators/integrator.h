@@ -3,6 +3,7 @@
 // segment answered by a visibility strategy (render/visibility).
 
 #include <memory>
+#include <vector>
 
 #include "visproxy/image/image.h"
 #include "visproxy/render/visibility/visibility.h"
@@ -36,8 +37,10 @@ struct IntegratorContext {
 
 /// The sum over M light samples (context.options.shadow_rays) of Le V cos_x cos_y / d^2
 /// times the lights' total area: divided by M, an unbiased estimate of the irradiance the
-/// area lights give `point`.
-Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility);
+/// area lights give `point`. With `worth`, appends each segment's term at V = 1, in the
+/// order the segments were asked.
+Color direct_light(const IntegratorContext& context, const ShadingPoint& point, PixelRandom& random, PointVisibility& visibility,
+                   std::vector<Color>* worth = nullptr);
 
 /// The VPLs an integrator shades: context.options.virtual_point_lights when given, else
 /// those its light paths leave (vpls, bounces, vpl_seed).

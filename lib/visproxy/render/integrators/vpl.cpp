@@ -72,7 +72,11 @@ class VplIntegrator final : public Integrator {
 
   Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const override {
     Color radiance = Color::Zero();
-    if (!context_.lights.empty()) radiance = direct_light(context_, point, random, visibility) / context_.options.shadow_rays;
+    const bool report = visibility.wants_contributions();
+    thread_local std::vector<Color> direct_worth;
+    direct_worth.clear();
+    if (!context_.lights.empty())
+      radiance = direct_light(context_, point, random, visibility, report ? &direct_worth : nullptr) / context_.options.shadow_rays;
     // Per-thread buffers, read through plain pointers in the loops (a thread_local vector's
     // fields would be reloaded on every iteration).
     thread_local std::vector<Vertex> ends;
@@ -117,6 +121,14 @@ class VplIntegrator final : public Integrator {
       dropped += l * (g[i] - clamped);
     }
     radiance = Color(r0, r1, r2);
+    if (report) {
+      thread_local std::vector<double> worth;
+      worth.clear();
+      for (const Color& d : direct_worth) worth.push_back(brdf.cwiseProduct(d).mean() / context_.options.shadow_rays);
+      for (std::size_t k = 0; k < facing; ++k)
+        worth.push_back(brdf.cwiseProduct(intensity[w[k]]).mean() * std::min(g[w[k]], max_geometric));
+      visibility.contributions(worth);
+    }
     energy_[point.pixel] += luminance(brdf) * energy;
     dropped_[point.pixel] += luminance(brdf) * dropped;
     return brdf.cwiseProduct(radiance);

@@ -32,6 +32,7 @@ nlohmann::json RenderStats::to_json() const {
           {"proxy_tests_per_shadow_ray", static_cast<double>(proxy_tests) / rays},
           {"optimal_probabilities", optimal_probabilities},
           {"learned_costs", learned_costs},
+          {"disk_gate", disk_gate},
           {"stochastic_terms",
            {{"a_proxy_only", eq8.terms[0]},
             {"b_mesh_if_proxy_hit", eq8.terms[1]},

@@ -47,6 +47,10 @@ struct RenderStats {
   /// choice weighed, modelled before the render (render/world/query_costs.h): the exact
   /// render's noise per segment and, per instance, a segment's modelled work; null otherwise.
   nlohmann::json learned_costs;
+  /// ProbabilityMode::learned with the control variate and occluder disks (the VPL
+  /// integrator with sphere sets): what the scene-level choice between the control variate
+  /// and exact visibility weighed before the render; null otherwise.
+  nlohmann::json disk_gate;
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries

@@ -52,6 +52,13 @@ class PointVisibility {
     (void)end_shells;
     for (std::size_t i = 0; i < ends.size(); ++i) out[i] = connection(ends[i]);
   }
+  /// Whether the strategy asks integrators for contributions() (costs them a pass over the
+  /// point's segments).
+  virtual bool wants_contributions() const { return false; }
+  /// What each segment answered since begin() adds to the luminance of the point's value
+  /// when it is visible (answer 1), in the order the segments were asked: integrators
+  /// report it before end() when wants_contributions().
+  virtual void contributions(std::span<const double> luminance) { (void)luminance; }
   /// After the point's last segment.
   virtual void end() {}
 };
@@ -85,6 +92,9 @@ struct VisibilityContext {
 std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);
 std::unique_ptr<Visibility> make_term_choice_visibility(const VisibilityContext& context);
 std::unique_ptr<Visibility> make_control_variate_visibility(const VisibilityContext& context);
+/// Whether the control variate's V' is occluder disks: the VPL integrator, with some
+/// instance's sphere set.
+bool control_variate_uses_disks(const VisibilityContext& context);
 std::unique_ptr<Visibility> make_bounds_visibility(const VisibilityContext& context);
 std::unique_ptr<Visibility> make_occluder_disk_visibility(const VisibilityContext& context);
 /// The strategy `context.options` asks for.
