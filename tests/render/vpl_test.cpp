@@ -404,6 +404,7 @@ TEST(VplIntegrator, ControlVariateWithOccluderDisksIsUnbiasedAndTheDisksAloneAre
       options.estimator = StochasticEstimator::control_variate;
       options.probabilities = variant.probabilities;
       options.correction_scale = 0.5;
+      options.disk_gate = false;  // the estimator itself (here its corrections would not pay)
       const RenderResult b = render(s.scene, world, options);
       ASSERT_TRUE(all_finite(b.image));
       if (variant.visibility == VisibilityMode::stochastic) {
@@ -580,8 +581,9 @@ TEST(OccluderDisks, LazyDisksAnswerAsEveryDiskAtTheBoundsEdges) { expect_lazy_di
 // render, whether it can pay. On the crowd (60 instances of a 642-triangle ball, 360 balls
 // made per point, 64 VPLs, far from the origin) the disks' set-up and tests cost more than
 // the meshes: the render traces every segment exactly and gives exact's image bit for bit,
-// without a disk test. Over the disk scene's finely tessellated ball (one ball of proxy) it
-// keeps the control variate, whose corrections then run.
+// without a disk test. Over the disk scene's ball (1280 triangles) with a centred ball of
+// proxy it keeps the control variate, whose corrections then run; with the off-centre ball
+// of the unbiasedness test it would not.
 TEST(VplIntegrator, LearnedControlVariateTracesExactlyWhereItsDisksCannotPay) {
   const CrowdScene c = disk_crowd(Vertex(2.0e5, -3.0e5, 1.0e4));
   const RenderWorld world(c.scene, c.proxies);
@@ -602,10 +604,12 @@ TEST(VplIntegrator, LearnedControlVariateTracesExactlyWhereItsDisksCannotPay) {
   EXPECT_EQ(learned.stats.control_variate.traced_exactly, learned.stats.exact_tests);
   EXPECT_TRUE(exact.stats.disk_gate.is_null());
 
-  const DiskScene s = disk_scene();
+  DiskScene s = disk_scene();
+  s.proxies[1].stochastic->spheres = {{{0, 0, 2}, 0.95}};  // centred: the disks are wrong only near the rim
   const RenderWorld ball_world(s.scene, s.proxies);
   RenderOptions ball{.integrator = IntegratorKind::vpl, .visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::learned,
                      .estimator = StochasticEstimator::control_variate, .spp = 8, .seed = 3, .virtual_point_lights = &s.lights};
+  ball.correction_scale = 0.25;  // the default with VPLs
   const RenderResult kept = render(s.scene, ball_world, ball);
   ASSERT_TRUE(kept.stats.disk_gate.is_object());
   std::printf("ball: %s\n", kept.stats.disk_gate.dump().c_str());
@@ -613,6 +617,16 @@ TEST(VplIntegrator, LearnedControlVariateTracesExactlyWhereItsDisksCannotPay) {
   EXPECT_LT(kept.stats.disk_gate["work_ratio"].get<double>() * kept.stats.disk_gate["variance_ratio"].get<double>(), kLearnedPaysBelow);
   EXPECT_GT(kept.stats.disks.tests, 0u);
   EXPECT_GT(kept.stats.control_variate.after_miss + kept.stats.control_variate.after_hit, 0u);
+  DiskScene off = disk_scene();
+  off.proxies[1].stochastic->spheres = {{{1.5, 0, 2}, 0.8}};  // beside the ball: wrong for most connections it meets
+  const RenderWorld off_world(off.scene, off.proxies);
+  const RenderResult gated = render(off.scene, off_world, ball);
+  std::printf("ball beside the mesh: %s\n", gated.stats.disk_gate.dump().c_str());
+  // Not by a hair: the variance x work product is a quarter beyond the threshold.
+  EXPECT_GT(gated.stats.disk_gate["variance_ratio"].get<double>() * gated.stats.disk_gate["work_ratio"].get<double>(),
+            1.25 * kLearnedPaysBelow);
+  EXPECT_TRUE(gated.stats.disk_gate["traced_exactly_everywhere"].get<bool>());
+  EXPECT_EQ(gated.stats.disks.tests, 0u);
 }
 
 // With occluder disks as V', segments to area lights are traced exactly: over the disk

@@ -211,30 +211,34 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
 //   segment's meshes; the control variate, the camera sample, the disks' set-up
 //   (kDiskSetupWork a ball made) and tests (kDiskTestWork a comparison), the meshes traced
 //   exactly (the own instance when splitting, segments to lights), and each segment's
-//   correction times its q. The two constants make the model's time of disks alone over
-//   exact's match `visproxy-bench-vpl` on the armadillo and menagerie rooms (0.06-0.27
-//   modelled against 0.09-0.36 measured), and its control variate's (0.41-0.67 against
-//   0.40-0.68).
+//   correction times its q, at kDiskCorrectionWork times its meshes' modelled work (a
+//   point's corrections go to Embree as packets of the few connections that drew one, not
+//   as exact's full packets). The constants were fit to `visproxy-bench-vpl` on the
+//   armadillo and menagerie rooms: the model puts disks alone at 0.06-0.27 of exact's time
+//   (measured 0.09-0.36), and the control variate at correction scales 0.25 and 2 at
+//   0.41-0.69 and 1.08 (measured 0.40-0.81 and 1.12).
 // The render traces every segment exactly when (T + A) x work_cv >= kLearnedPaysBelow x T x
 // work_exact, the rule learned_choice() applies to direct light.
-constexpr std::size_t kDiskGateSide = 16;
+constexpr std::size_t kDiskGateSide = 12;
 constexpr std::size_t kDiskGatePairs = kDiskGateSide * kDiskGateSide;
 constexpr int kDiskGatePasses = 16;
 constexpr double kDiskSetupWork = 1.5;
 constexpr double kDiskTestWork = 0.035;
+constexpr double kDiskCorrectionWork = 1.75;
 
 struct DiskGateRecord {
   bool exact = false;  // traced exactly, as the control variate traces segments to lights
   bool traced_blocked = false, proxy_blocked = false, mesh_blocked = false;
-  double exact_work = 0, correction_work = 0, disk_work = 0;
-  double contribution = 0;  // luminance, when visible
+  float exact_work = 0, correction_work = 0, disk_work = 0;
+  float contribution = 0;  // luminance, when visible
 };
 
-// Answers exactly, recording what the control variate would see.
+// Answers exactly, recording what the control variate would see; a point's connections go
+// to Embree as packets, as the render's do.
 class DiskGateProbe final : public PointVisibility {
  public:
   DiskGateProbe(const VisibilityContext& context, const OccluderDiskIndex& index, std::vector<DiskGateRecord>& records)
-      : context_(context), index_(index), camera_(CameraRays(context.scene.camera).origin()), records_(records) {}
+      : context_(context), index_(index), records_(records) {}
   void begin(const ShadingPoint& point) override {
     point_ = point;
     first_ = records_.size();
@@ -250,44 +254,83 @@ class DiskGateProbe final : public PointVisibility {
     DiskGateRecord r;
     r.exact = true;
     r.traced_blocked = context_.world.mesh_blocks(point_.position, end);
-    r.exact_work = r.correction_work = segment_query_costs(context_.world, camera_, point_.position, end, point_.hit->instance, false).exact;
+    r.exact_work = r.correction_work = static_cast<float>(costs(end).exact);
     records_.push_back(r);
     return r.traced_blocked ? 0.0 : 1.0;
   }
-  double connection(const Vertex& end) override { return segment(end); }
+  double connection(const Vertex& end) override {
+    const Vertex ends[1] = {end};
+    double out[1] = {0};
+    connections(ends, {}, out);
+    return out[0];
+  }
+  void connections(std::span<const Vertex> ends, std::span<const unsigned> end_shells, std::span<double> out) override {
+    const std::size_t m = ends.size();
+    // The exactly traced part: the own instance when splitting, instances without sphere sets.
+    traced_.assign(m, 0);
+    index_of_.clear(), lane_ends_.clear(), lanes_.clear();
+    for (std::size_t i = 0; i < m; ++i)
+      if (const unsigned lane = exact_part_.lane(ends[i], end_shells.empty() ? nullptr : &end_shells[i]); lane != 0)
+        index_of_.push_back(i), lane_ends_.push_back(ends[i]), lanes_.push_back(lane);
+    trace(traced_);
+    // One segment at a time: the comparisons counted are those of the single-segment test,
+    // which the disk work's constant was fit to.
+    proxy_.resize(m);
+    disk_work_.resize(m);
+    for (std::size_t i = 0; i < m; ++i) {
+      std::uint64_t tests = 0;
+      proxy_[i] = disks_.occludes(ends[i], tests) ? 1 : 0;
+      disk_work_[i] = static_cast<float>(kDiskTestWork * static_cast<double>(tests));
+    }
+    // The meshes the disks stand for, where the traced part let the segment through.
+    mesh_.assign(m, 0);
+    index_of_.clear(), lane_ends_.clear(), lanes_.clear();
+    for (std::size_t i = 0; i < m; ++i)
+      if (!traced_[i]) index_of_.push_back(i), lane_ends_.push_back(ends[i]), lanes_.push_back(disk_bits_);
+    trace(mesh_);
+    for (std::size_t i = 0; i < m; ++i) {
+      DiskGateRecord r;
+      r.traced_blocked = traced_[i] != 0, r.proxy_blocked = proxy_[i] != 0, r.mesh_blocked = mesh_[i] != 0;
+      r.disk_work = disk_work_[i];
+      const SegmentQueryCosts c = costs(ends[i]);
+      r.exact_work = static_cast<float>(c.exact), r.correction_work = static_cast<float>(c.correction);
+      records_.push_back(r);
+      out[i] = r.traced_blocked || r.mesh_blocked ? 0.0 : 1.0;
+    }
+  }
   bool wants_contributions() const override { return true; }
   void contributions(std::span<const double> luminance) override {
     if (luminance.size() != records_.size() - first_) throw Error("render: an integrator reported contributions for other segments than it asked");
-    for (std::size_t i = 0; i < luminance.size(); ++i) records_[first_ + i].contribution = luminance[i];
+    for (std::size_t i = 0; i < luminance.size(); ++i) records_[first_ + i].contribution = static_cast<float>(luminance[i]);
   }
   // The disks the point made (with a lazy index, those its segments asked for).
   std::size_t balls() const { return disks_.size(); }
 
  private:
-  double segment(const Vertex& end) {
-    const RenderWorld& world = context_.world;
-    DiskGateRecord r;
-    const unsigned lane = exact_part_.lane(end);
-    r.traced_blocked = lane != 0 && world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = lane});
-    std::uint64_t tests = 0;
-    r.proxy_blocked = disks_.occludes(end, tests);
-    r.disk_work = kDiskTestWork * static_cast<double>(tests);
-    r.mesh_blocked = !r.traced_blocked && world.mesh_blocks(point_.position, end, {.skip = -1, .only = -1, .bits = disk_bits_});
-    const SegmentQueryCosts c = segment_query_costs(world, camera_, point_.position, end, point_.hit->instance, context_.options.split);
-    r.exact_work = c.exact, r.correction_work = c.correction;
-    records_.push_back(r);
-    return r.traced_blocked || r.mesh_blocked ? 0.0 : 1.0;
+  SegmentQueryCosts costs(const Vertex& end) const {
+    return shadow_segment_costs(context_.world, point_.position, end, point_.hit->instance, context_.options.split);
+  }
+  // answers[index_of_[k]] for the segments to lane_ends_[k] against the instances of lanes_[k].
+  void trace(std::vector<std::uint8_t>& answers) {
+    if (lane_ends_.empty()) return;
+    blocked_.resize(lane_ends_.size());
+    context_.world.mesh_blocks(point_.position, lane_ends_, blocked_, {}, lanes_);
+    for (std::size_t k = 0; k < lane_ends_.size(); ++k) answers[index_of_[k]] = blocked_[k];
   }
 
   const VisibilityContext& context_;
   const OccluderDiskIndex& index_;
-  Vertex camera_;
   std::vector<DiskGateRecord>& records_;
   std::size_t first_ = 0;
   ShadingPoint point_;
   PointDisks disks_;
   ExactConnections exact_part_;
   unsigned disk_bits_ = 0;
+  std::vector<std::uint8_t> traced_, proxy_, mesh_, blocked_;
+  std::vector<float> disk_work_;
+  std::vector<std::size_t> index_of_;
+  std::vector<Vertex> lane_ends_;
+  std::vector<unsigned> lanes_;
 };
 
 struct DiskGate {
@@ -393,7 +436,7 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
         work_cv += record.exact_work - record.correction_work + record.disk_work;
         if (record.traced_blocked) continue;
         const double p = record.proxy_blocked ? q.after_hit : q.after_miss;
-        work_cv += p * record.correction_work;
+        work_cv += p * kDiskCorrectionWork * record.correction_work;
         probability_sum += p, probability_count += 1;
         if (record.proxy_blocked != record.mesh_blocked) added += record.contribution * record.contribution * (1 / p - 1);
         if (draws.uniform() < p) evidence.add(record.proxy_blocked, record.mesh_blocked);
@@ -537,7 +580,7 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
     s.traced_exactly_everywhere = !s.correction_costs.costs.empty() && !any_proxy_can_pay(s.visibility_context);
   }
   if (stochastic && options.probabilities == ProbabilityMode::learned && options.estimator == StochasticEstimator::control_variate &&
-      options.integrator == IntegratorKind::vpl && control_variate_uses_disks(s.visibility_context)) {
+      options.integrator == IntegratorKind::vpl && options.disk_gate && control_variate_uses_disks(s.visibility_context)) {
     const DiskGate gate = scene_disk_gate(s.visibility_context);
     s.traced_exactly_everywhere = gate.trace_exactly;
     s.disk_gate = gate.to_json();

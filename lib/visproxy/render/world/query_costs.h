@@ -43,5 +43,8 @@ struct SegmentQueryCosts {
 /// traced exactly as part of the proxy query; a correction traces only the others).
 SegmentQueryCosts segment_query_costs(const RenderWorld& world, const Vertex& camera, const Vertex& from, const Vertex& to, int own,
                                       bool split);
+/// The same without the camera ray's and shading's part (camera = 0): for many segments
+/// from one point.
+SegmentQueryCosts shadow_segment_costs(const RenderWorld& world, const Vertex& from, const Vertex& to, int own, bool split);
 
 }  // namespace visproxy
