@@ -215,10 +215,12 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context) {
 //   point's corrections go to Embree as packets of the few connections that drew one, not
 //   as exact's full packets). The constants were fit to `visproxy-bench-vpl` on the
 //   armadillo and menagerie rooms: the model puts disks alone at 0.06-0.27 of exact's time
-//   (measured 0.09-0.36), and the control variate at correction scales 0.25 and 2 at
-//   0.41-0.69 and 1.08 (measured 0.40-0.81 and 1.12).
+//   (measured 0.09-0.36), the control variate at correction scale 0.25 at 0.48-0.73
+//   (measured 0.36-0.71), and at scale 2 on the armadillo room at 1.17 (measured 1.12).
 // The render traces every segment exactly when (T + A) x work_cv >= kLearnedPaysBelow x T x
-// work_exact, the rule learned_choice() applies to direct light.
+// work_exact, the rule learned_choice() applies to direct light. Without noise in the
+// pairs (T = 0), it keeps the control variate only where A = 0 and work_cv is below
+// kLearnedPaysBelow x work_exact.
 constexpr std::size_t kDiskGateSide = 12;
 constexpr std::size_t kDiskGatePairs = kDiskGateSide * kDiskGateSide;
 constexpr int kDiskGatePasses = 16;
@@ -334,7 +336,7 @@ class DiskGateProbe final : public PointVisibility {
 };
 
 struct DiskGate {
-  bool weighed = false;        // some pair had noise to weigh (else the control variate is kept)
+  bool weighed = false;        // the pairs showed noise (T > 0) to weigh A against
   bool trace_exactly = false;  // the control variate cannot pay: trace every segment exactly
   int passes = 0;              // replayed per pixel
   double noise = 0;            // T
@@ -412,8 +414,7 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
     noise += (value[0] - value[1]) * (value[0] - value[1]) / 2;
   }
   DiskGate gate;
-  if (!(noise > 0) || records.empty()) return gate;
-  gate.weighed = true;
+  if (records.empty()) return gate;  // no segment to weigh
   const CorrectionOptions correction{.scale = options.correction_scale, .floor = options.probability_floor};
   const int passes = std::clamp(options.spp, 1, kDiskGatePasses);
   double work_exact = 0, work_cv = 0, added = 0, probability_sum = 0, probability_count = 0;
@@ -446,10 +447,17 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
   gate.passes = passes;
   gate.noise = noise / kDiskGatePairs;
   gate.added = added / (static_cast<double>(kDiskGatePairs) * passes);
-  gate.variance_ratio = (gate.noise + gate.added) / gate.noise;
   gate.work_ratio = work_cv / work_exact;
   gate.corrections = probability_count > 0 ? probability_sum / probability_count : 0.0;
-  gate.trace_exactly = !(gate.variance_ratio * gate.work_ratio < kLearnedPaysBelow);
+  gate.weighed = gate.noise > 0;
+  if (gate.weighed) {
+    gate.variance_ratio = (gate.noise + gate.added) / gate.noise;
+    gate.trace_exactly = !(gate.variance_ratio * gate.work_ratio < kLearnedPaysBelow);
+  } else {
+    // Exact answers without noise: the control variate only where it adds none and costs
+    // less (variance_ratio stays 1: no ratio to take).
+    gate.trace_exactly = gate.added > 0 || !(gate.work_ratio < kLearnedPaysBelow);
+  }
   return gate;
 }
 
