@@ -1,0 +1,53 @@
+#pragma once
+// What a render learns from the scene's own samples before its first pass: eq. 8's optimal
+// probabilities, the learned control variate's modelled costs and priors (direct light),
+// and whether the learned control variate with occluder disks can pay at all (VPLs). Each
+// is seeded from the render's seed, so that the image stays a function of the options.
+
+#include <array>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "visproxy/estimator/probabilities.h"
+#include "visproxy/render/visibility/visibility.h"
+#include "visproxy/render/world/query_costs.h"
+
+namespace visproxy {
+
+/// ProbabilityMode::optimal: eq. 8's optimal probabilities for each form of the rest of the
+/// scene (indexed by ProxyKind), from the ray types of 20 000 of the scene's own shadow
+/// segments.
+std::array<Probabilities, 3> scene_optimal_probabilities(const VisibilityContext& context);
+
+/// ProbabilityMode::learned with the control variate and direct light: per instance, a
+/// segment's modelled costs and the proxy's prior, and the exact render's noise per
+/// segment; empty when no sample found a lit segment.
+struct SceneCorrectionCosts {
+  std::vector<CorrectionCosts> costs;
+  std::vector<CorrectionPrior> priors;
+  std::vector<SegmentQueryCosts> work;  ///< per instance, the averages the costs come from
+  double noise = 0;
+};
+SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context);
+
+/// Whether the learned rule could give any instance's proxy to a pixel at the instance's
+/// average costs (context.correction_costs and correction_priors set).
+bool any_proxy_can_pay(const VisibilityContext& context);
+
+/// ProbabilityMode::learned with the control variate and occluder disks: what the
+/// scene-level choice between the control variate and exact visibility weighed.
+struct DiskGate {
+  bool weighed = false;        ///< the pairs showed noise (T > 0) to weigh A against
+  bool trace_exactly = false;  ///< the control variate cannot pay: trace every segment exactly
+  int passes = 0;              ///< replayed per pixel
+  double noise = 0;            ///< T: the exact render's variance per camera sample
+  double added = 0;            ///< A: the variance the corrections add per camera sample
+  double variance_ratio = 1;   ///< (T + A) / T
+  double work_ratio = 1;       ///< the control variate's modelled work over exact's
+  double corrections = 0;      ///< the replayed corrections' mean probability
+  nlohmann::json to_json() const;  ///< RenderStats::disk_gate
+};
+DiskGate scene_disk_gate(const VisibilityContext& context);
+
+}  // namespace visproxy
