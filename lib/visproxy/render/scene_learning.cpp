@@ -122,7 +122,6 @@ bool any_proxy_can_pay(const VisibilityContext& context) {
   return false;
 }
 
-
 namespace {
 
 // ProbabilityMode::learned with the control variate and occluder disks as V' (the VPL
