@@ -7,7 +7,6 @@
 #include "visproxy/render/integrators/integrator.h"
 #include "visproxy/render/scene_learning.h"
 #include "visproxy/render/visibility/visibility.h"
-#include "visproxy/render/world/query_costs.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -15,7 +14,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <numbers>
 #include <optional>
 #include <utility>

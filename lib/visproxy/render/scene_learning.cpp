@@ -178,19 +178,17 @@ class DiskGateProbe final : public PointVisibility {
   void begin(const ShadingPoint& point) override {
     point_ = point;
     first_ = records_.size();
-    const RenderOptions& o = context_.options;
-    const DiskPartition partition = disks_.begin(index_, *point.hit, point.position, o.split, o.self_shadow == SelfShadow::heuristic,
-                                                 o.disk_grid_from, o.disk_clusters);
-    exact_part_.begin(context_.world, point.position, partition.traced);
-    exact_part_.skip_own_where_clear(*point.hit, partition.own_alone);
-    disk_bits_ = partition.disks;
+    // As the control variate begins its points (ControlVariatePoint::begin).
+    disk_bits_ = begin_point_disks(disks_, exact_part_, index_, context_.world, context_.options, *point.hit, point.position,
+                                   context_.options.split)
+                     .disks;
   }
   // As the control variate with disks answers them: segments to lights exactly.
   double to_light(const Vertex& end) override {
     DiskGateRecord r;
     r.exact = true;
     r.traced_blocked = context_.world.mesh_blocks(point_.position, end);
-    r.exact_work = r.correction_work = static_cast<float>(costs(end).exact);
+    r.exact_work = static_cast<float>(costs(end).exact);
     records_.push_back(r);
     return r.traced_blocked ? 0.0 : 1.0;
   }
@@ -333,7 +331,7 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
       value[k] = integrator->shade(point, brdf, random, probe).mean();
       probe.end();
       sample.last = records.size();
-      sample.camera_work = segment_query_costs(world, eye, position, position, hit->instance, options.split).camera;
+      sample.camera_work = camera_sample_work(world, eye, position);
       sample.setup_work = kDiskSetupWork * static_cast<double>(probe.balls());
     }
     noise += (value[0] - value[1]) * (value[0] - value[1]) / 2;

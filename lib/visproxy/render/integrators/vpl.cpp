@@ -72,11 +72,15 @@ class VplIntegrator final : public Integrator {
 
   Color shade(const ShadingPoint& point, const Color& brdf, PixelRandom& random, PointVisibility& visibility) const override {
     Color radiance = Color::Zero();
+    // What each segment is worth, only for a strategy that asks (PointVisibility::contributions).
     const bool report = visibility.wants_contributions();
-    thread_local std::vector<Color> direct_worth;
-    direct_worth.clear();
-    if (!context_.lights.empty())
-      radiance = direct_light(context_, point, random, visibility, report ? &direct_worth : nullptr) / context_.options.shadow_rays;
+    std::vector<Color>* direct_worth = nullptr;
+    if (report) {
+      thread_local std::vector<Color> buffer;
+      buffer.clear();
+      direct_worth = &buffer;
+    }
+    if (!context_.lights.empty()) radiance = direct_light(context_, point, random, visibility, direct_worth) / context_.options.shadow_rays;
     // Per-thread buffers, read through plain pointers in the loops (a thread_local vector's
     // fields would be reloaded on every iteration).
     thread_local std::vector<Vertex> ends;
@@ -124,7 +128,7 @@ class VplIntegrator final : public Integrator {
     if (report) {
       thread_local std::vector<double> worth;
       worth.clear();
-      for (const Color& d : direct_worth) worth.push_back(brdf.cwiseProduct(d).mean() / context_.options.shadow_rays);
+      for (const Color& d : *direct_worth) worth.push_back(brdf.cwiseProduct(d).mean() / context_.options.shadow_rays);
       for (std::size_t k = 0; k < facing; ++k)
         worth.push_back(brdf.cwiseProduct(intensity[w[k]]).mean() * std::min(g[w[k]], max_geometric));
       visibility.contributions(worth);

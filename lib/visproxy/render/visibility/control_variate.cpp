@@ -180,11 +180,8 @@ void ControlVariatePoint::begin(const ShadingPoint& point) {
   if (!disks_in_use_) return;
   // Traced exactly: the own instance when splitting, and every instance without a sphere
   // set. The disks stand for the others.
-  const DiskPartition partition =
-      disks_.begin(*shared_.disk_index_, *point.hit, point.position, options.split, options.self_shadow == SelfShadow::heuristic,
-                   options.disk_grid_from, options.disk_clusters);
-  exact_part_.begin(shared_.context_.world, point.position, partition.traced);
-  exact_part_.skip_own_where_clear(*point.hit, partition.own_alone);
+  const DiskPartition partition = begin_point_disks(disks_, exact_part_, *shared_.disk_index_, shared_.context_.world, options,
+                                                    *point.hit, point.position, options.split);
   disk_part_ = {.skip = -1, .only = -1, .bits = partition.disks};
   any_exact_ = partition.traced != 0;
 }

@@ -628,6 +628,15 @@ void PointDisks::occludes(std::span<const Vertex> ends, std::span<std::uint8_t> 
   for (std::size_t k = 0; k < ends.size(); ++k) hidden[k] = occludes(ends[k], tests, clusters) ? 1 : 0;
 }
 
+DiskPartition begin_point_disks(PointDisks& disks, ExactConnections& traced, const OccluderDiskIndex& index, const RenderWorld& world,
+                                const RenderOptions& options, const SurfaceHit& hit, const Vertex& position, bool trace_own) {
+  const DiskPartition partition = disks.begin(index, hit, position, trace_own, options.self_shadow == SelfShadow::heuristic,
+                                              options.disk_grid_from, options.disk_clusters);
+  traced.begin(world, position, partition.traced);
+  traced.skip_own_where_clear(hit, partition.own_alone);
+  return partition;
+}
+
 namespace {
 
 class OccluderDiskVisibility;
@@ -668,11 +677,8 @@ class OccluderDiskVisibility final : public Visibility {
 void OccluderDiskPoint::begin(const ShadingPoint& point) {
   point_ = point;
   const RenderOptions& options = shared_.context_.options;
-  const DiskPartition partition =
-      disks_.begin(shared_.index_, *point.hit, point.position, options.self_shadow == SelfShadow::exact,
-                   options.self_shadow == SelfShadow::heuristic, options.disk_grid_from, options.disk_clusters);
-  traced_.begin(shared_.context_.world, point.position, partition.traced);
-  traced_.skip_own_where_clear(*point.hit, partition.own_alone);
+  const DiskPartition partition = begin_point_disks(disks_, traced_, shared_.index_, shared_.context_.world, options, *point.hit,
+                                                    point.position, options.self_shadow == SelfShadow::exact);
   any_traced_ = partition.traced != 0;
 }
 

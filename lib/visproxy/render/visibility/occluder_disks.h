@@ -16,6 +16,7 @@
 #include "visproxy/render/world/box_tree.h"
 #include "visproxy/render/world/render_world.h"
 #include "visproxy/render/options/render_stats.h"
+#include "visproxy/render/visibility/visibility.h"
 
 namespace visproxy {
 
@@ -197,6 +198,14 @@ class PointDisks {
   std::vector<std::uint32_t> group_;  // per run: its group in disks_, none (no ball in front of the point), or not made yet
   std::vector<DiskGroup> cone_;       // per run: its bound's cone from the point
 };
+
+/// A shading point's disks and the instances traced exactly instead, begun together:
+/// `disks` as PointDisks::begin with the options' self-shadowing heuristic, grid and
+/// clusters, `traced` over the partition's traced instances, leaving out the own one where
+/// the segment clears it. `trace_own`: the own instance is traced exactly (the control
+/// variate's splitting, or spheres visibility's exact self-shadowing).
+DiskPartition begin_point_disks(PointDisks& disks, ExactConnections& traced, const OccluderDiskIndex& index, const RenderWorld& world,
+                                const RenderOptions& options, const SurfaceHit& hit, const Vertex& position, bool trace_own);
 
 /// Whether any of the n disks (n a multiple of OccluderDisks::kDiskBlock) hides the
 /// segment to w = (wx, wy, wz) at distance z = |w|: w . u_j > cos_j z (cos delta > cos

@@ -25,12 +25,17 @@ InstanceWork instance_work(const RenderWorld& world, std::size_t instance) {
 
 SegmentQueryCosts segment_query_costs(const RenderWorld& world, const Vertex& camera, const Vertex& from, const Vertex& to, int own,
                                       bool split) {
-  thread_local std::vector<std::size_t> met;
   SegmentQueryCosts costs = shadow_segment_costs(world, from, to, own, split);
-  costs.camera = kQueryWork + kShadingWork;
-  instances_met(world, camera, from, met);
-  for (const std::size_t i : met) costs.camera += instance_work(world, i).mesh;
+  costs.camera = camera_sample_work(world, camera, from);
   return costs;
+}
+
+double camera_sample_work(const RenderWorld& world, const Vertex& camera, const Vertex& from) {
+  thread_local std::vector<std::size_t> met;
+  double work = kQueryWork + kShadingWork;
+  instances_met(world, camera, from, met);
+  for (const std::size_t i : met) work += instance_work(world, i).mesh;
+  return work;
 }
 
 SegmentQueryCosts shadow_segment_costs(const RenderWorld& world, const Vertex& from, const Vertex& to, int own, bool split) {

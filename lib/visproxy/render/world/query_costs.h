@@ -46,5 +46,7 @@ SegmentQueryCosts segment_query_costs(const RenderWorld& world, const Vertex& ca
 /// The same without the camera ray's and shading's part (camera = 0): for many segments
 /// from one point.
 SegmentQueryCosts shadow_segment_costs(const RenderWorld& world, const Vertex& from, const Vertex& to, int own, bool split);
+/// That part alone: the camera ray from `camera` that found `from`, and its shading.
+double camera_sample_work(const RenderWorld& world, const Vertex& camera, const Vertex& from);
 
 }  // namespace visproxy
