@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <cstdio>
@@ -21,6 +22,56 @@ Vertex random_unit(Random& random) {
     const Vertex v(2 * random.uniform() - 1, 2 * random.uniform() - 1, 2 * random.uniform() - 1);
     if (v.squaredNorm() > 1e-6 && v.squaredNorm() <= 1) return v.normalized();
   }
+}
+
+// The single-precision disk test errs by at most OccluderDisks::kDiskTestError (in units of
+// |w|, cos delta against cos gamma), the bound that the clusters' widened cones rest on:
+// 3000 balls from 1e-5 to nearly 1 of their distance wide (the point close to the surface),
+// at 0.01 to 3000 units, half of them 1e5 units from the origin, and segments whose exact
+// cos delta lies within 2 kDiskTestError of cos gamma on either side. No answer lies beyond
+// the bound, and the test does err (some hidden segments lie outside the exact cone), so
+// the bound is what keeps the clusters' answers those of every disk.
+TEST(OccluderDisks, TheSinglePrecisionTestErrsWithinItsBound) {
+  Random random(4242);
+  constexpr double e = OccluderDisks::kDiskTestError;
+  std::uint64_t segments = 0, outside_hidden = 0, beyond = 0, tests = 0;
+  double largest = 0;  // the largest error seen, over e
+  for (int p = 0; p < 3000; ++p) {
+    const Vertex x = (p % 2 == 0 ? Vertex(1e5, -7e4, 3e4) : Vertex::Zero()) + Vertex(random.uniform(), random.uniform(), random.uniform());
+    const Vertex axis = random_unit(random);
+    const double t = 0.01 * std::pow(10.0, 5.5 * random.uniform());
+    const double share = p % 5 == 0 ? 1 - std::pow(10.0, -4 * random.uniform()) : std::pow(10.0, -5 * random.uniform());
+    const Sphere ball{x + t * axis, share * t};
+    Vertex n = random_unit(random);
+    if (n.dot(axis) < 0) n = -n;
+    OccluderDisks disks;
+    disks.reset(x, n);
+    disks.add({ball}, false);
+    disks.finish();
+    const Vertex v = ball.center - x;
+    const double t_exact = v.norm(), cos_gamma = std::sqrt((t_exact - ball.radius) * (t_exact + ball.radius)) / t_exact;
+    const Vertex u = v / t_exact;
+    for (int k = 0; k < 64; ++k) {
+      const double excess = 2 * e * (2 * random.uniform() - 1) * std::pow(10.0, -2 * random.uniform());
+      const double cos_delta = std::clamp(cos_gamma - excess, -1.0, 1.0);
+      Vertex side = random_unit(random);
+      side = (side - side.dot(u) * u).normalized();
+      const double sin_delta = std::sqrt(std::max(0.0, 1 - cos_delta * cos_delta));
+      const Vertex end = x + t_exact * (1.5 + random.uniform()) * (cos_delta * u + sin_delta * side);
+      const Vertex w = end - x;
+      const double error = cos_gamma - v.dot(w) / (t_exact * w.norm());  // > 0: outside the exact cone
+      const bool hidden = disks.occludes(end, tests);
+      ++segments;
+      if (hidden && error > 0) ++outside_hidden, largest = std::max(largest, error / e);
+      if (!hidden && error < 0) largest = std::max(largest, -error / e);
+      if ((hidden && error > e) || (!hidden && error < -e)) ++beyond;
+    }
+  }
+  std::printf("single-precision disk test: %llu segments, %llu hidden outside the exact cone, largest error %.3f of the bound\n",
+              static_cast<unsigned long long>(segments), static_cast<unsigned long long>(outside_hidden), largest);
+  EXPECT_EQ(beyond, 0u);
+  EXPECT_GT(outside_hidden, 0u);
+  EXPECT_GT(largest, 0.01);
 }
 
 // The group form of occludes() of each of `disks` gives `answers` for `ends`.

@@ -39,104 +39,167 @@ void OccluderDisks::reset(const Vertex& x, const Vertex& n) {
 
 namespace {
 
-// The disks of `count` balls from x (unit normal n), in double: keep[i] is -1 for a ball
-// in front of the tangent plane that the self-shadowing heuristic (when `heuristic`) does
-// not skip, else 0. Selects rather than branches, so that the loop vectorises across balls.
-__attribute__((target_clones("avx2", "default"))) void ball_disks(const Sphere* balls, std::size_t count, const Vertex& x,
-                                                                 const Vertex& n, bool heuristic, double* __restrict ux,
-                                                                 double* __restrict uy, double* __restrict uz,
-                                                                 double* __restrict cos_gamma, double* __restrict t_out,
-                                                                 std::int64_t* __restrict keep) {
+// The disks of `count` balls from x (unit normal n), stored in single precision at ux[i],
+// ... t[i]. In double: v = O - x, |v|^2 and |v|^2 - R^2 (no cancellation in single
+// precision), rounded to single; in single, 8 lanes at a time: t = |v| and its reciprocal,
+// u = v / t and cos gamma = sqrt(|v|^2 - R^2) / t, each within 3 units of 2^-24 (the error
+// OccluderDisks::kDiskTestError counts). A ball behind the tangent plane, or one the
+// self-shadowing heuristic (when `heuristic`) skips, becomes a disk that hides nothing
+// (cos gamma 2, as padding), so that the balls keep their places and both loops vectorise
+// across balls with selects rather than branches. Returns the balls kept and, in `used`,
+// one past the last.
+__attribute__((target_clones("avx2", "default"))) std::size_t ball_disks(const Sphere* balls, std::size_t count, const Vertex& x,
+                                                                        const Vertex& n, bool heuristic, float* __restrict ux,
+                                                                        float* __restrict uy, float* __restrict uz,
+                                                                        float* __restrict cos_gamma, float* __restrict t_out,
+                                                                        std::size_t& used) {
   const double x0 = x.x(), x1 = x.y(), x2 = x.z(), n0 = n.x(), n1 = n.y(), n2 = n.z();
   const std::int64_t skip_close = heuristic ? -1 : 0;
   static_assert(sizeof(Sphere) == 4 * sizeof(double));
   const double* const b = balls[0].center.data();  // centre and radius: four packed doubles per ball
+  thread_local std::vector<std::int32_t> keeping;
+  keeping.resize(count);
+  std::int32_t* __restrict keep = keeping.data();
+  // v, |v|^2 and |v|^2 - R^2 go into the output arrays first.
   for (std::size_t i = 0; i < count; ++i) {
     const double r = b[4 * i + 3];
     const double v0 = b[4 * i] - x0, v1 = b[4 * i + 1] - x1, v2 = b[4 * i + 2] - x2;
     const double along = n0 * v0 + n1 * v1 + n2 * v2;
-    const double t = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
+    const double squared = v0 * v0 + v1 * v1 + v2 * v2;
     const std::int64_t behind = along <= -r ? -1 : 0;  // behind the tangent plane
-    const std::int64_t close = t < 2 * r ? -1 : 0;
-    keep[i] = ~(behind | (close & skip_close));
-    const bool outside = t > r;  // else x inside the ball: every direction
-    ux[i] = outside ? v0 / t : 0.0;
-    uy[i] = outside ? v1 / t : 0.0;
-    uz[i] = outside ? v2 / t : 1.0;
-    cos_gamma[i] = outside ? std::sqrt(t * t - r * r) / t : -2.0;
-    t_out[i] = t;
+    const std::int64_t close = squared < 4 * r * r ? -1 : 0;  // t < 2R
+    keep[i] = static_cast<std::int32_t>(~(behind | (close & skip_close)));
+    ux[i] = static_cast<float>(v0), uy[i] = static_cast<float>(v1), uz[i] = static_cast<float>(v2);
+    t_out[i] = static_cast<float>(squared);
+    cos_gamma[i] = static_cast<float>(squared - r * r);
+  }
+  std::int32_t kept = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const float t = std::sqrt(t_out[i]), inverse = 1 / t, rest = cos_gamma[i];
+    const bool outside = rest > 0;  // else x inside the ball: every direction
+    const bool k = keep[i] != 0;
+    const float a = outside ? ux[i] * inverse : 0.0f, c = outside ? uy[i] * inverse : 0.0f, d = outside ? uz[i] * inverse : 1.0f;
+    const float cosine = outside ? std::sqrt(rest) * inverse : -2.0f;
+    ux[i] = k ? a : 0.0f, uy[i] = k ? c : 0.0f, uz[i] = k ? d : 1.0f;
+    cos_gamma[i] = k ? cosine : 2.0f;
+    t_out[i] = k ? t : 0.0f;
+    kept -= keep[i];
+  }
+  used = count;
+  while (used > 0 && cos_gamma[used - 1] == 2.0f) --used;
+  return static_cast<std::size_t>(kept);
+}
+
+}  // namespace
+
+void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const DiskGroup* cone) {
+  DiskGroup group;
+  const std::size_t base = disks_.ux.size();
+  group.begin = static_cast<std::uint32_t>(base);
+  const std::size_t count = static_cast<std::size_t>(last - first);
+  const std::size_t room = (count + kDiskBlock - 1) / kDiskBlock * kDiskBlock;
+  disks_.resize(base + room);
+  std::size_t used = 0;
+  const std::size_t kept = ball_disks(first, count, x_, n_, self_heuristic, disks_.ux.data() + base, disks_.uy.data() + base,
+                                      disks_.uz.data() + base, disks_.cos.data() + base, disks_.t.data() + base, used);
+  if (kept == 0) {
+    disks_.resize(base);
+    return;
+  }
+  // Up to the last ball kept, then padding to a whole block.
+  disks_.resize(base + used);
+  disks_.pad_to(kDiskBlock);
+  group.count = static_cast<std::uint32_t>(used);
+  count_ += kept;
+  if (cone) group.ux = cone->ux, group.uy = cone->uy, group.uz = cone->uz, group.cos = cone->cos;
+  groups_.push_back(group);
+}
+
+namespace {
+
+// The cones of `count` clusters' bounds from x, as OccluderDisks::bound_cone() describes
+// them: into ux[i], ..., cos[i] (cos -2: every direction). Selects rather than branches, so
+// that the loop vectorises across clusters; bound_cone() is this for one cluster, so that
+// every form of the test gets the same cones.
+//
+// A direction the float test passes for a held ball of half-angle g lies within
+// g + spread of the ball's axis, spread = acos(cos g - e) - g, so within G + spread of the
+// bound's (G its half-angle: the ball's cone lies in the bound's). The bound's own float
+// test passes every direction whose exact cosine exceeds its stored cosine by e: the
+// stored cosine is cos(G + spread) - e, rounded down. Angles are added through their
+// cosines and sines, with g at its least (the least radius at the farthest distance).
+__attribute__((target_clones("avx2", "default"))) void bound_cones(const double* __restrict cx, const double* __restrict cy,
+                                                                  const double* __restrict cz, const double* __restrict cr,
+                                                                  const double* __restrict cl, std::size_t count, const Vertex& x,
+                                                                  float* __restrict ux, float* __restrict uy, float* __restrict uz,
+                                                                  float* __restrict cos) {
+  constexpr double e = OccluderDisks::kDiskTestError;
+  const double x0 = x.x(), x1 = x.y(), x2 = x.z();
+  for (std::size_t i = 0; i < count; ++i) {
+    const double radius = cr[i];
+    const double v0 = cx[i] - x0, v1 = cy[i] - x1, v2 = cz[i] - x2;
+    const double t = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2), inverse = 1 / t;
+    const double sin_bound = radius * inverse, cos_bound = std::sqrt(std::max(0.0, (t - radius) * (t + radius))) * inverse;
+    const double sin_least = std::min(std::max(cl[i] / (t + radius), 0.0), sin_bound);
+    const double cos_least = std::sqrt(std::max(0.0, 1 - sin_least * sin_least));
+    const double cos_reach = cos_least - e;  // cos(g + spread)
+    const double sin_reach = std::sqrt(std::max(0.0, 1 - cos_reach * cos_reach));
+    const double cos_rest = cos_bound * cos_least + sin_bound * sin_least;  // cos(G - g)
+    const double sin_rest = std::max(0.0, sin_bound * cos_least - cos_bound * sin_least);
+    // cos(G + spread) = cos((G - g) + (g + spread)); 2^-40 more for the double arithmetic.
+    const double cos_cone = cos_rest * cos_reach - sin_rest * sin_reach - e - 0x1.0p-40;
+    // Every direction where x lies in the bound (or on it) or the cone reaches all round.
+    const bool some = t > radius && cos_cone > -1;
+    // Stored rounded down: where rounding went up, the next float below (for 0: -2^-149).
+    const float stored = static_cast<float>(cos_cone);
+    const std::int32_t bits = std::bit_cast<std::int32_t>(stored);
+    const std::int32_t down = stored == 0 ? std::int32_t{-0x7FFFFFFF} : bits - 1 + ((bits >> 31) & 2);
+    const float below = static_cast<double>(stored) > cos_cone ? std::bit_cast<float>(down) : stored;
+    ux[i] = some ? static_cast<float>(v0 * inverse) : 0.0f;
+    uy[i] = some ? static_cast<float>(v1 * inverse) : 0.0f;
+    uz[i] = some ? static_cast<float>(v2 * inverse) : 1.0f;
+    cos[i] = some ? below : -2.0f;
   }
 }
 
 }  // namespace
 
-void OccluderDisks::add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius) {
-  DiskGroup group;
-  group.begin = static_cast<std::uint32_t>(disks_.ux.size());
-  const std::size_t count = static_cast<std::size_t>(last - first);
-  thread_local std::vector<double> bx, by, bz, bc, bt;
-  thread_local std::vector<std::int64_t> keep;
-  bx.resize(count), by.resize(count), bz.resize(count), bc.resize(count), bt.resize(count), keep.resize(count);
-  ball_disks(first, count, x_, n_, self_heuristic, bx.data(), by.data(), bz.data(), bc.data(), bt.data(), keep.data());
-  // The kept disks packed at the end of the arrays, without a branch per ball: every ball is
-  // written at the next free place, which only a kept one takes.
-  const std::size_t base = disks_.ux.size();
-  for (std::vector<float>* column : {&disks_.ux, &disks_.uy, &disks_.uz, &disks_.cos, &disks_.t}) column->resize(base + count);
-  float *ux = disks_.ux.data() + base, *uy = disks_.uy.data() + base, *uz = disks_.uz.data() + base;
-  float *cos = disks_.cos.data() + base, *t = disks_.t.data() + base;
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < count; ++i) {
-    ux[kept] = static_cast<float>(bx[i]), uy[kept] = static_cast<float>(by[i]), uz[kept] = static_cast<float>(bz[i]);
-    cos[kept] = static_cast<float>(bc[i]), t[kept] = static_cast<float>(bt[i]);
-    kept += static_cast<std::size_t>(keep[i] & 1);
-  }
-  for (std::vector<float>* column : {&disks_.ux, &disks_.uy, &disks_.uz, &disks_.cos, &disks_.t}) column->resize(base + kept);
-  group.count = static_cast<std::uint32_t>(kept);
-  if (group.count == 0) return;
-  disks_.pad_to(kDiskBlock);
-  count_ += group.count;
-  if (bound) {
-    const DiskGroup cone = bound_cone(*bound, least_radius);
-    group.ux = cone.ux, group.uy = cone.uy, group.uz = cone.uz, group.cos = cone.cos;
-  }
-  groups_.push_back(group);
-}
-
 DiskGroup OccluderDisks::bound_cone(const Sphere& bound, double least_radius) const {
-  // A direction the float test passes for a held ball of half-angle g lies within
-  // g + spread of the ball's axis, spread = acos(cos g - e) - g, so within G + spread of the
-  // bound's (G its half-angle: the ball's cone lies in the bound's). The bound's own float
-  // test passes every direction whose exact cosine exceeds its stored cosine by e: the
-  // stored cosine is cos(G + spread) - e, rounded down. Angles are added through their
-  // cosines and sines, with g at its least (the least radius at the farthest distance).
-  DiskGroup group;  // every direction
-  const Vertex v = bound.center - x_;
-  const double t = v.norm();
-  if (!(t > bound.radius)) return group;
-  const double sin_bound = bound.radius / t, cos_bound = std::sqrt((t - bound.radius) * (t + bound.radius)) / t;
-  const double sin_least = std::clamp(least_radius / (t + bound.radius), 0.0, sin_bound);
-  const double cos_least = std::sqrt(std::max(0.0, 1 - sin_least * sin_least));
-  const double cos_reach = cos_least - kDiskTestError;  // cos(g + spread)
-  const double sin_reach = std::sqrt(std::max(0.0, 1 - cos_reach * cos_reach));
-  const double cos_rest = cos_bound * cos_least + sin_bound * sin_least;  // cos(G - g)
-  const double sin_rest = std::max(0.0, sin_bound * cos_least - cos_bound * sin_least);
-  // cos(G + spread) = cos((G - g) + (g + spread)); 2^-40 more for the double arithmetic.
-  const double cos_cone = cos_rest * cos_reach - sin_rest * sin_reach - kDiskTestError - 0x1.0p-40;
-  if (!(cos_cone > -1)) return group;
-  const Vertex u = v / t;
-  group.ux = static_cast<float>(u.x()), group.uy = static_cast<float>(u.y()), group.uz = static_cast<float>(u.z());
-  float stored = static_cast<float>(cos_cone);
-  if (static_cast<double>(stored) > cos_cone) stored = std::nextafter(stored, -2.0f);
-  group.cos = stored;
+  DiskGroup group;
+  visproxy::bound_cones(&bound.center.x(), &bound.center.y(), &bound.center.z(), &bound.radius, &least_radius, 1, x_, &group.ux,
+                        &group.uy, &group.uz, &group.cos);
   return group;
 }
 
+void OccluderDisks::bound_cones(const ClusterBounds& bounds, BoundCones& cones) const {
+  const std::size_t count = bounds.size();
+  cones.ux.resize(count), cones.uy.resize(count), cones.uz.resize(count), cones.cos.resize(count);
+  visproxy::bound_cones(bounds.x.data(), bounds.y.data(), bounds.z.data(), bounds.radius.data(), bounds.least.data(), count, x_,
+                        cones.ux.data(), cones.uy.data(), cones.uz.data(), cones.cos.data());
+}
+
 void OccluderDisks::add(const std::vector<Sphere>& spheres, bool self_heuristic) {
-  add_balls(spheres.data(), spheres.data() + spheres.size(), self_heuristic, nullptr, 0);
+  add_balls(spheres.data(), spheres.data() + spheres.size(), self_heuristic, nullptr);
 }
 
 void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic) {
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
+  thread_local ClusterBounds bounds;
+  thread_local BoundCones cones;
+  bounds.clear();
+  for (const SphereCluster& cluster : clusters) bounds.push(cluster);
+  bound_cones(bounds, cones);
+  add(spheres, clusters, self_heuristic, cones, 0);
+}
+
+void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic,
+                        const BoundCones& cones, std::size_t offset) {
+  const std::size_t count = clusters.size();
+  const auto cone = [&](std::size_t c) {
+    DiskGroup group;
+    group.ux = cones.ux[offset + c], group.uy = cones.uy[offset + c], group.uz = cones.uz[offset + c], group.cos = cones.cos[offset + c];
+    return group;
+  };
+  for (std::size_t c = 0; c < count; ++c) {
     const SphereCluster& cluster = clusters[c];
     // Every ball of a bound behind the tangent plane is behind it too.
     if (behind(cluster.bound)) {
@@ -144,16 +207,17 @@ void OccluderDisks::add(const std::vector<Sphere>& spheres, const std::vector<Sp
       continue;
     }
     if (cluster.children == 0) {
-      add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &cluster.bound, cluster.least_radius);
+      const DiskGroup own = cone(c);
+      add_balls(spheres.data() + cluster.begin, spheres.data() + cluster.end, self_heuristic, &own);
       continue;
     }
     // A head: its cone, then the groups of the clusters it heads that keep a ball.
     const std::size_t head = groups_.size();
-    DiskGroup header = bound_cone(cluster.bound, cluster.least_radius);
-    groups_.push_back(header);
+    groups_.push_back(cone(c));
     for (std::size_t k = 0; k < cluster.children; ++k) {
       const SphereCluster& child = clusters[c + 1 + k];
-      add_balls(spheres.data() + child.begin, spheres.data() + child.end, self_heuristic, &child.bound, child.least_radius);
+      const DiskGroup own = cone(c + 1 + k);
+      add_balls(spheres.data() + child.begin, spheres.data() + child.end, self_heuristic, &own);
     }
     c += cluster.children;
     groups_[head].span = static_cast<std::uint32_t>(groups_.size() - head - 1);
@@ -462,14 +526,19 @@ bool disk_occludes_reference(const Vertex& x, const Sphere& ball, const Vertex& 
 
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
                                      const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,
-                                     bool clusters) {
+                                     bool clusters, const ClusterBounds* bounds) {
   DiskPartition partition;
   disks.reset(position, hit.normal);
+  thread_local BoundCones cones;
+  if (clusters && bounds) disks.bound_cones(*bounds, cones);
+  std::size_t offset = 0;  // the instance's first cluster in `bounds`
   const unsigned own_bit = hit.instance >= 0 ? instance_bit(static_cast<std::size_t>(hit.instance)) : 0u;
   bool own_traced = false, shared = false;  // the own instance traced; another traced instance has its bit
   for (std::size_t i = 0; i < instances; ++i) {
     const bool is_own = static_cast<int>(i) == hit.instance;
     const std::vector<Sphere>& balls = world.occluder_spheres(i);
+    const std::size_t first = offset;
+    offset += world.occluder_clusters(i).size();
     if (balls.empty() || (is_own && trace_own)) {
       // Traced exactly.
       partition.traced |= instance_bit(i);
@@ -477,7 +546,9 @@ DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& wo
       shared = shared || (!is_own && instance_bit(i) == own_bit);
       continue;
     }
-    if (clusters)
+    if (clusters && bounds)
+      disks.add(balls, world.occluder_clusters(i), is_own && own_heuristic, cones, first);
+    else if (clusters)
       disks.add(balls, world.occluder_clusters(i), is_own && own_heuristic);
     else
       disks.add(balls, is_own && own_heuristic);
@@ -499,6 +570,7 @@ OccluderDiskIndex::OccluderDiskIndex(const RenderWorld& world, std::size_t insta
       continue;
     }
     has_spheres_[i] = 1, ++with;
+    for (const SphereCluster& cluster : world.occluder_clusters(i)) bounds_.push(cluster);
     ++with_spheres_[bit], with_bits_ |= instance_bit(i);
   }
   lazy_ = with >= lazy_from;
@@ -526,7 +598,7 @@ DiskPartition PointDisks::begin(const OccluderDiskIndex& index, const SurfaceHit
   index_ = &index;
   if (!index.lazy())
     return prepare_occluder_disks(disks_, *index.world_, index.instances_, hit, position, trace_own, own_heuristic, grid_from,
-                                  clusters);
+                                  clusters, &index.bounds_);
   // As prepare_occluder_disks() sets the bits, from the counts per bit: only the own
   // instance's bit can differ from the scene's.
   disks_.reset(position, hit.normal);
@@ -614,8 +686,7 @@ bool PointDisks::occludes(const Vertex& end, std::uint64_t& tests, std::uint64_t
         if (group_[r] == kNotMade) {
           const std::vector<Sphere>& balls = world.occluder_spheres(run.instance);
           const std::size_t first = disks_.groups();
-          disks_.add_run(balls.data() + cluster.begin, balls.data() + cluster.end, own && own_heuristic_,
-                         clusters_ ? &cluster.bound : nullptr, cluster.least_radius);
+          disks_.add_run(balls.data() + cluster.begin, balls.data() + cluster.end, own && own_heuristic_, clusters_ ? &cone : nullptr);
           group_[r] = disks_.groups() > first ? static_cast<std::uint32_t>(first) : kNoGroup;
         }
         return group_[r] != kNoGroup && disks_.group_disks_occlude(group_[r], dx, dy, dz, zf, tests);

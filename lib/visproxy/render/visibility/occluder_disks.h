@@ -29,9 +29,28 @@ struct DiskGroup {
   std::uint32_t begin = 0, count = 0, span = 0;
 };
 
+/// The bounds of clusters (SphereCluster::bound and least_radius) in structure-of-arrays
+/// form, so that their cones from a point are made many at a time.
+struct ClusterBounds {
+  std::vector<double> x, y, z, radius, least;
+  void push(const SphereCluster& cluster) {
+    x.push_back(cluster.bound.center.x()), y.push_back(cluster.bound.center.y()), z.push_back(cluster.bound.center.z());
+    radius.push_back(cluster.bound.radius), least.push_back(cluster.least_radius);
+  }
+  std::size_t size() const { return x.size(); }
+  void clear() { x.clear(), y.clear(), z.clear(), radius.clear(), least.clear(); }
+};
+
+/// The cones of clusters' bounds from one point, as OccluderDisks::bound_cone() makes them
+/// (cos < -1: every direction), in structure-of-arrays form.
+struct BoundCones {
+  std::vector<float> ux, uy, uz, cos;
+};
+
 /// The balls of a set as occluder disks from one point, in structure-of-arrays form
 /// (single precision), in groups: the balls of one cluster (SphereCluster) after each other,
-/// padded to a multiple of kDiskBlock with balls that hide nothing. A group with a bound
+/// padded to a multiple of kDiskBlock with disks that hide nothing (a ball left out, behind
+/// the tangent plane or skipped by the self-shadowing heuristic, keeps its place as one). A group with a bound
 /// has that bound's cone too, widened by what the single-precision test of its smallest
 /// ball can err (bound_cone): a segment that the single-precision test finds outside it is
 /// one that the same test finds outside every cone of the group's balls, so the group's balls
@@ -51,6 +70,13 @@ class OccluderDisks {
   /// them, heads of clusters included); a cluster whose bound lies behind the tangent plane
   /// is left out whole, with the clusters it heads.
   void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic);
+  /// The same with the clusters' cones already made: those of `cones` from `offset` on, one
+  /// per cluster (bound_cones() of bounds that hold these clusters' in order).
+  void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic, const BoundCones& cones,
+           std::size_t offset);
+  /// The cones bound_cone() gives for every cluster of `bounds`, from this point, into
+  /// `cones` (vectorised across clusters).
+  void bound_cones(const ClusterBounds& bounds, BoundCones& cones) const;
   /// Call after the last add() and before occludes(). With `grid`, also sorts the disks
   /// into a grid over the stereographic projection of the hemisphere around n (a spherical
   /// cap projects to a disc): each cell lists the disks whose cap can reach it, so that the
@@ -66,11 +92,11 @@ class OccluderDisks {
   /// segment of the chunk not hidden yet lies in its bound's cone; with the grid, cell by
   /// cell: each cell's disks across the segments whose direction falls into it.
   void occludes(std::span<const Vertex> ends, std::span<std::uint8_t> hidden, std::uint64_t& tests) const;
-  /// Adds the balls [first, last) as one group, with the cone of `bound` (a ball holding
-  /// them, the least of whose radii is `least_radius`) when it is given: one cluster of a
-  /// set, as add() with clusters adds it.
-  void add_run(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius = 0) {
-    add_balls(first, last, self_heuristic, bound, least_radius);
+  /// Adds the balls [first, last) as one group, with `cone` when it is given: the cone
+  /// bound_cone() gives for a ball that holds them and the least of their radii. One
+  /// cluster of a set, as add() with clusters adds it.
+  void add_run(const Sphere* first, const Sphere* last, bool self_heuristic, const DiskGroup* cone) {
+    add_balls(first, last, self_heuristic, cone);
   }
   /// occludes() for the groups [first, last) alone (as groups() counts them; a head's span
   /// must end within the range): a set's groups, added by one add().
@@ -91,8 +117,10 @@ class OccluderDisks {
   /// `least_radius`, widened so that every segment the single-precision disk test finds in
   /// one of their cones is found in it by the same test (cos < -1, every direction, when x
   /// is inside the bound). The disk test w . u > cos gamma |w| in float errs by at most
-  /// kDiskTestError |w| (roundings of w, u, cos gamma, |w|, three products and two sums:
-  /// under 8 units of 2^-24, taken as 16); a ball whose cone has half-angle g is then passed
+  /// kDiskTestError |w|: in units of 2^-24 |w|, 0.5 for rounding w, 2.5 for u and 3 for
+  /// cos gamma (each made in single precision from |v|^2 and |v|^2 - R^2 rounded from
+  /// double), 3 for the dot product, 1 for rounding |w| and the product with cos gamma:
+  /// 10, taken as 16; a ball whose cone has half-angle g is then passed
   /// by directions up to acos(cos g - kDiskTestError) - g beyond it, which is largest for
   /// the smallest cone: sin g >= least_radius / (|O - x| + R) for a bound (O, R).
   DiskGroup bound_cone(const Sphere& bound, double least_radius) const;
@@ -105,12 +133,14 @@ class OccluderDisks {
   struct Soa {
     std::vector<float> ux, uy, uz, cos, t;
     void clear() { ux.clear(), uy.clear(), uz.clear(), cos.clear(), t.clear(); }
-    void push(float x, float y, float z, float c, float d) { ux.push_back(x), uy.push_back(y), uz.push_back(z), cos.push_back(c), t.push_back(d); }
+    void resize(std::size_t n) { ux.resize(n), uy.resize(n), uz.resize(n), cos.resize(n), t.resize(n); }
     void pad_to(std::size_t multiple) {
-      while (ux.size() % multiple != 0) push(0, 0, 1, 2, 0);  // hides nothing: cos gamma above any cosine
+      // Disks that hide nothing: cos gamma above any cosine.
+      const std::size_t n = ux.size(), padded = (n + multiple - 1) / multiple * multiple;
+      ux.resize(padded, 0), uy.resize(padded, 0), uz.resize(padded, 1), cos.resize(padded, 2), t.resize(padded, 0);
     }
   };
-  void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const Sphere* bound, double least_radius);
+  void add_balls(const Sphere* first, const Sphere* last, bool self_heuristic, const DiskGroup* cone);
 
   Vertex x_ = Vertex::Zero(), n_ = Vertex::UnitZ(), tangent_ = Vertex::UnitX(), bitangent_ = Vertex::UnitY();
   std::size_t count_ = 0;
@@ -135,9 +165,11 @@ struct DiskPartition {
   /// (SurfaceHit::own_mesh_clear_of) need not trace it (ExactConnections::skip_own_where_clear).
   unsigned own_alone = 0;
 };
+/// `bounds`, when given, holds the bounds of every instance's clusters, one instance's after
+/// another (OccluderDiskIndex keeps them), so that the point makes all their cones at once.
 DiskPartition prepare_occluder_disks(OccluderDisks& disks, const RenderWorld& world, std::size_t instances, const SurfaceHit& hit,
                                      const Vertex& position, bool trace_own, bool own_heuristic, std::size_t grid_from,
-                                     bool clusters = true);
+                                     bool clusters = true, const ClusterBounds* bounds = nullptr);
 
 /// The instances' sphere sets, indexed once per render for PointDisks: which instances have
 /// one, how many with and without one share each mask bit, and, from `lazy_from` instances
@@ -155,6 +187,7 @@ class OccluderDiskIndex {
   std::size_t instances_ = 0;
   bool lazy_ = false;
   std::vector<std::uint8_t> has_spheres_;
+  ClusterBounds bounds_;  // every instance's clusters, one instance's after another
   std::array<std::uint32_t, 31> with_spheres_{}, without_spheres_{};  // instances per mask bit
   unsigned with_bits_ = 0, without_bits_ = 0;
   struct Run {
