@@ -14,6 +14,8 @@
 #include "visproxy/core/random.h"
 #include "visproxy/mesh/sphere_set.h"
 #include "visproxy/render/renderer.h"
+#include "visproxy/render/scene_learning.h"
+#include "visproxy/render/world/sampling.h"
 #include "visproxy/render/visibility/visibility.h"
 #include "render/render_test_scenes.h"
 #include "test_support.h"
@@ -322,6 +324,7 @@ TEST(StochasticVisibility, PairedPixelMeansShowNoBiasInPenumbrae) {
         stochastic.probe_rays = 4;
         stochastic.probe_passes = variant.estimator == StochasticEstimator::control_variate ? 2 : 0;
         stochastic.correction_scale = 0.5;  // aggressive: most corrections skipped
+        stochastic.gate = false;  // the estimator itself, wherever it would not pay
         const Image a = render(s.scene, world, exact_options).image;
         const RenderResult stochastic_result = render(s.scene, world, stochastic);
         const Image& b = stochastic_result.image;
@@ -487,6 +490,122 @@ TEST(StochasticVisibility, LearnedControlVariateTracesExactlyWhereItsProxyDoesNo
   const RenderResult adaptive = render(s.scene, world, adaptive_options);
   EXPECT_EQ(adaptive.stats.control_variate.traced_exactly, 0u);
   EXPECT_TRUE(adaptive.stats.learned_costs.is_null());
+}
+
+// The gate per instance: with the ball's points marked to trace exactly and the floor's
+// not, adaptive eq. 8 answers the ball's segments as the meshes do (0 or 1, each counted as
+// traced exactly, no probe, no term), and probes and draws terms on the floor.
+TEST(StochasticVisibility, AdaptiveEq8GateIsPerInstance) {
+  const TwoInstances s = penumbra_view({ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5);
+  const RenderWorld world(s.scene, s.proxies);
+  const LightSampler lights(s.scene);
+  RenderOptions options{.visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive};
+  VisibilityContext context{s.scene, world, options, lights, 1, {}, {}, {}, {0, 1}};
+  const std::unique_ptr<Visibility> visibility = make_term_choice_visibility(context);
+  const std::unique_ptr<PointVisibility> answers = visibility->point_visibility();
+  PixelRandom choices(3, 0, 0), random(4, 0, 0);
+  std::array<RenderStats, 2> stats;  // per instance of the point
+  std::array<int, 2> points{};
+  double p1_sum = 0, p1_count = 0;
+  for (int i = 0; i < 400; ++i) {
+    const double reach = i % 2 == 0 ? 3.0 : 1.0;  // every other ray over the ball
+    const Vertex from(reach * (2 * random.uniform() - 1), reach * (2 * random.uniform() - 1), 6);
+    const std::optional<SurfaceHit> hit = world.intersect(from, Vertex(0, 0, -1));
+    if (!hit || hit->light >= 0) continue;
+    const std::size_t own = static_cast<std::size_t>(hit->instance);
+    ++points[own];
+    const ShadingPoint point{.pixel = 0, .pass = 0, .hit = &*hit,
+                             .position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal,
+                             .choices = &choices, .stats = &stats[own], .p1_sum = &p1_sum, .p1_count = &p1_count};
+    answers->begin(point);
+    for (int k = 0; k < 4; ++k) {
+      const Vertex end(-2 + 4 * random.uniform(), -2 + 4 * random.uniform(), 5.5);
+      const double value = answers->to_light(end);
+      if (own == 1) {
+        EXPECT_EQ(value, world.mesh_blocks(point.position, end) ? 0.0 : 1.0);
+      }
+    }
+    answers->end();
+  }
+  ASSERT_GT(points[0], 50);
+  ASSERT_GT(points[1], 50);
+  EXPECT_EQ(stats[1].eq8.traced_exactly, 4u * static_cast<unsigned>(points[1]));
+  EXPECT_EQ(stats[1].probe_rays + stats[1].proxy_tests + stats[1].eq8.terms[0] + stats[1].eq8.terms[1] + stats[1].eq8.terms[2], 0u);
+  EXPECT_EQ(stats[0].eq8.traced_exactly, 0u);
+  EXPECT_GT(stats[0].probe_rays, 0u);
+  EXPECT_EQ(stats[0].eq8.terms[0] + stats[0].eq8.terms[1] + stats[0].eq8.terms[2], 4u * static_cast<unsigned>(points[0]));
+}
+
+// eq8_predicted_ratio() against the numbers worked by hand: an outside proxy that blocks
+// 40 % of the segments and is never wrong there (f_miss = 1) gets p1 = 0.95 and p2 = 0.05
+// at the floor 0.05, so eq. 8 adds 0.6 (1 / 0.95 - 1) to a segment, and its work is camera
+// + proxy + 0.05 x 0.4 x correction, plus the probes. A proxy 10x cheaper than its mesh
+// pays where the probes are shared (16 probes in one pass of 80, over 4 shadow rays: 0.05
+// per segment), not where every point probes 16 times for one shadow ray. The rates of a
+// side the kind proves right do not count (an outside proxy's misses, here 30 % "wrong");
+// a general proxy wrong half the time never pays; no noise gives +infinity.
+TEST(StochasticVisibility, Eq8PredictedRatioWeighsNoiseWorkAndProbes) {
+  CorrectionPrior prior;
+  prior.share = {0.6, 0.4};
+  prior.disagreeing = {0.3, 0.0};  // wrong when letting through: an outside proxy cannot be
+  const SegmentQueryCosts work{.camera = 2, .exact = 40, .proxy = 4, .correction = 38};
+  const double noise = 0.5;
+  const double shared = eq8_predicted_ratio(ProxyKind::outside, prior, work, noise, 0.05, 0.05, false);
+  const double added = 0.6 * (1 / 0.95 - 1);
+  const double expected = (noise + added) * (2 + 4 + 38 * 0.05 * 0.4 + 0.05 * (4 + 38)) / (noise * (2 + 40));
+  EXPECT_NEAR(shared, expected, 1e-9 * expected);
+  EXPECT_LT(shared, kLearnedPaysBelow);
+  EXPECT_GE(eq8_predicted_ratio(ProxyKind::outside, prior, work, noise, 16.0, 0.05, false), kLearnedPaysBelow);
+  CorrectionPrior wrong = prior;
+  wrong.disagreeing = {0.5, 0.5};
+  EXPECT_GE(eq8_predicted_ratio(ProxyKind::general, wrong, work, noise, 0.0, 0.05, false), kLearnedPaysBelow);
+  EXPECT_TRUE(std::isinf(eq8_predicted_ratio(ProxyKind::outside, prior, work, 0.0, 0.05, 0.05, false)));
+}
+
+// Adaptive eq. 8 with direct light traces exactly from the points of an instance where,
+// at the instance's modelled costs and ray types, its variance x work (probe rays
+// included) is not below kLearnedPaysBelow of exact's. Probing every point (16 probes, one
+// shadow ray per sample), it cannot pay anywhere: the render is exact visibility, exact's
+// image bit for bit, without a probe, a proxy query or a drawn term. --no-gate keeps eq. 8
+// everywhere (the probes run again).
+TEST(StochasticVisibility, AdaptiveEq8TracesExactlyWhereItCannotPay) {
+  TwoInstances s = penumbra_view({ProxyKind::general, "fine ball", {}, {{{0, 0, 2}, 1.0}}}, 5);
+  s.scene.camera.width = s.scene.camera.height = 24;
+  const RenderWorld world(s.scene, s.proxies);
+  RenderOptions exact{.spp = 8, .shadow_rays = 1, .seed = 31};
+  RenderOptions adaptive = exact;
+  adaptive.visibility = VisibilityMode::stochastic;
+  adaptive.probabilities = ProbabilityMode::adaptive;
+  adaptive.probe_rays = 16;
+  const RenderResult a = render(s.scene, world, exact), b = render(s.scene, world, adaptive);
+  ASSERT_TRUE(b.stats.learned_costs.is_object());
+  EXPECT_TRUE(b.stats.learned_costs["traced_exactly_everywhere"].get<bool>());
+  for (const nlohmann::json& instance : b.stats.learned_costs["instances"]) {
+    ASSERT_TRUE(instance.contains("eq8_predicted_ratio"));
+    if (!instance["eq8_predicted_ratio"].is_null()) {
+      EXPECT_GE(instance["eq8_predicted_ratio"].get<double>(), kLearnedPaysBelow);
+    }
+  }
+  EXPECT_EQ(b.image.pixels, a.image.pixels);
+  EXPECT_EQ(b.stats.eq8.traced_exactly, b.stats.shadow_rays);
+  EXPECT_EQ(b.stats.probe_rays, 0u);
+  EXPECT_EQ(b.stats.proxy_tests, 0u);
+  EXPECT_EQ(b.stats.eq8.terms[0] + b.stats.eq8.terms[1] + b.stats.eq8.terms[2], 0u);
+
+  // What the gate weighed: noise, costs and ray types for both instances, neither paying
+  // here (eq. 8's term (a) adds 1/p1 - 1 to every free segment, a ball proxy costs 0.75 of
+  // the fine ball's mesh in modelled work, and the probes add 16 queries of each per point).
+  EXPECT_EQ(b.stats.learned_costs["instances"].size(), 2u);
+  EXPECT_GT(b.stats.learned_costs["noise_per_segment"].get<double>(), 0);
+
+  // Without the gate, eq. 8 probes and draws its terms at every point.
+  adaptive.spp = 8, adaptive.shadow_rays = 1, adaptive.probe_passes = 0;
+  adaptive.gate = false;
+  const RenderResult e = render(s.scene, world, adaptive);
+  EXPECT_TRUE(e.stats.learned_costs.is_null());
+  EXPECT_EQ(e.stats.eq8.traced_exactly, 0u);
+  EXPECT_GT(e.stats.probe_rays, 0u);
+  EXPECT_GT(e.stats.eq8.terms[0], 0u);
 }
 
 }  // namespace

@@ -404,7 +404,7 @@ TEST(VplIntegrator, ControlVariateWithOccluderDisksIsUnbiasedAndTheDisksAloneAre
       options.estimator = StochasticEstimator::control_variate;
       options.probabilities = variant.probabilities;
       options.correction_scale = 0.5;
-      options.disk_gate = false;  // the estimator itself (here its corrections would not pay)
+      options.gate = false;  // the estimator itself (here its corrections would not pay)
       const RenderResult b = render(s.scene, world, options);
       ASSERT_TRUE(all_finite(b.image));
       if (variant.visibility == VisibilityMode::stochastic) {

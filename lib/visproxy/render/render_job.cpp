@@ -188,6 +188,11 @@ std::vector<RenderOption> make_options() {
   o.push_back(flag("cost_heuristic", "--cost-heuristic",
                    "stochastic eq8, adaptive: favour the proxy where it agrees with the mesh (eq. 22-24)", true,
                    [](RenderJob& j) -> bool& { return j.options.cost_heuristic; }));
+  o.push_back(flag("gate", "--no-gate",
+                   "stochastic: render the estimator everywhere, even where the gate before the render finds that it "
+                   "cannot beat exact visibility (adaptive eq8 with direct light, for each instance's points; the "
+                   "learned control variate with VPLs and occluder disks, for the scene), as the paper's estimators are",
+                   false, [](RenderJob& j) -> bool& { return j.options.gate; }));
   o.push_back(integer(
       "probe_passes", "--probe-passes",
       "adaptive: 0 probes every shading point; P > 0 probes only in each pixel's first P passes and keeps the ray "
@@ -340,6 +345,7 @@ RenderedScene render_scene(const RenderJob& job, const RenderCallbacks& callback
       {"probabilities", name_of(options.probabilities)},
       {"estimator", name_of(options.estimator)},
       {"cost_heuristic", options.cost_heuristic},
+      {"gate", options.gate},
       {"probe_passes", options.probe_passes},
       {"split", options.split},
       {"probe_rays", options.probe_rays},

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <numbers>
 #include <optional>
 #include <utility>
@@ -102,7 +103,7 @@ struct RenderSession::State {
         camera(scene_.camera),
         lights(scene_),
         pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height)),
-        visibility_context{scene_, world_, options, lights, pixels, {}, {}, {}} {}
+        visibility_context{scene_, world_, options, lights, pixels, {}, {}, {}, {}} {}
 
   const Scene& scene;
   const RenderWorld& world;
@@ -116,6 +117,7 @@ struct RenderSession::State {
   SceneCorrectionCosts correction_costs;
   // The learned control variate where no instance's proxy can pay: exact visibility itself.
   bool traced_exactly_everywhere = false;
+  std::vector<double> eq8_ratios;  // adaptive eq. 8's gate, per instance
   nlohmann::json disk_gate;  // what the VPL control variate's scene-level choice weighed
   std::unique_ptr<Visibility> visibility;
   std::unique_ptr<IntegratorContext> integrator_context;
@@ -194,10 +196,23 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
     s.traced_exactly_everywhere = !s.correction_costs.costs.empty() && !any_proxy_can_pay(s.visibility_context);
   }
   if (stochastic && options.probabilities == ProbabilityMode::learned && options.estimator == StochasticEstimator::control_variate &&
-      options.integrator == IntegratorKind::vpl && options.disk_gate && control_variate_uses_disks(s.visibility_context)) {
+      options.integrator == IntegratorKind::vpl && options.gate && control_variate_uses_disks(s.visibility_context)) {
     const DiskGate gate = scene_disk_gate(s.visibility_context);
     s.traced_exactly_everywhere = gate.trace_exactly;
     s.disk_gate = gate.to_json();
+  }
+  // Adaptive eq. 8 with direct light: the points of an instance where eq. 8 cannot pay at
+  // the instance's modelled costs, probes included, trace every segment exactly; where no
+  // instance's can, the render is exact visibility.
+  if (stochastic && options.probabilities == ProbabilityMode::adaptive && options.estimator == StochasticEstimator::term_choice &&
+      options.integrator == IntegratorKind::direct && options.gate) {
+    s.correction_costs = scene_correction_costs(s.visibility_context);
+    if (!s.correction_costs.costs.empty()) {
+      s.eq8_ratios = adaptive_eq8_ratios(s.visibility_context, s.correction_costs);
+      std::vector<std::uint8_t>& exact = s.visibility_context.trace_exactly_from;
+      for (const double ratio : s.eq8_ratios) exact.push_back(ratio >= kLearnedPaysBelow ? 1 : 0);
+      s.traced_exactly_everywhere = std::all_of(exact.begin(), exact.end(), [](std::uint8_t e) { return e != 0; });
+    }
   }
   // Where no evidence could make any instance's proxy pay at its average modelled costs,
   // the render traces every segment exactly: exact visibility does so from the first
@@ -271,7 +286,9 @@ RenderResult RenderSession::result() const {
       const Probabilities& p = s.visibility_context.optimal[static_cast<std::size_t>(kind)];
       result.stats.optimal_probabilities[std::string(kind_name(kind))] = {p.p1, p.p2, p.p3};
     }
-  if (s.traced_exactly_everywhere) result.stats.control_variate.traced_exactly = result.stats.exact_tests;
+  if (s.traced_exactly_everywhere)
+    (s.options.estimator == StochasticEstimator::term_choice ? result.stats.eq8.traced_exactly : result.stats.control_variate.traced_exactly) =
+        result.stats.exact_tests;
   result.stats.disk_gate = s.disk_gate;
   const SceneCorrectionCosts& costs = s.correction_costs;
   if (!costs.costs.empty()) {
@@ -287,6 +304,9 @@ RenderResult RenderSession::result() const {
                            {"proxy_blocks_share", costs.priors[i].share[1]},
                            {"wrong_when_letting_through", costs.priors[i].disagreeing[0]},
                            {"wrong_when_blocking", costs.priors[i].disagreeing[1]}});
+      if (i < s.eq8_ratios.size())
+        instances.back()["eq8_predicted_ratio"] =
+            std::isfinite(s.eq8_ratios[i]) ? nlohmann::json(s.eq8_ratios[i]) : nlohmann::json(nullptr);
     }
     result.stats.learned_costs = {
         {"noise_per_segment", costs.noise}, {"instances", instances}, {"traced_exactly_everywhere", s.traced_exactly_everywhere}};

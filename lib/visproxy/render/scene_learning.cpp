@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <span>
@@ -120,6 +121,40 @@ bool any_proxy_can_pay(const VisibilityContext& context) {
     if (learned_choice(kinds[i], CorrectionEvidence{}, context.correction_costs[i], options, context.correction_priors[i]).can_pay)
       return true;
   return false;
+}
+
+double eq8_predicted_ratio(ProxyKind kind, const CorrectionPrior& prior, const SegmentQueryCosts& work, double noise,
+                           double probes_per_segment, double floor, bool cost_heuristic) {
+  // The ray types from the prior's rates; an outside proxy's misses and an inside proxy's
+  // hits are right by proof (the prior's estimates are never exactly 0).
+  const double free = prior.share[0], blocked = prior.share[1];
+  const double wrong_free = kind == ProxyKind::outside ? 0.0 : prior.disagreeing[0];
+  const double wrong_blocked = kind == ProxyKind::inside ? 0.0 : prior.disagreeing[1];
+  RayTypeFractions fractions;
+  fractions.f = {blocked * (1 - wrong_blocked), free * wrong_free, blocked * wrong_blocked, free * (1 - wrong_free)};
+  Probabilities p = optimal_probabilities(kind, fractions, {.floor = floor});
+  if (cost_heuristic) p = apply_cost_heuristic(kind, p, fractions, floor);
+  const double v = fractions.v_avg();
+  // What eq. 8 adds to a segment whose visibility is fixed: eq. 16 less V's own variance.
+  const double added = std::max(0.0, estimator_variance(fractions, p) - v * (1 - v));
+  const double eq8 = work.camera + work.proxy + work.correction * (p.p2 * blocked + p.p3 * free) +
+                     probes_per_segment * (work.proxy + work.correction);
+  const double exact = work.camera + work.exact;
+  const double ratio = (noise + added) * eq8 / (noise * exact);
+  return std::isfinite(ratio) && noise > 0 && exact > 0 ? ratio : std::numeric_limits<double>::infinity();
+}
+
+std::vector<double> adaptive_eq8_ratios(const VisibilityContext& context, const SceneCorrectionCosts& costs) {
+  const RenderOptions& options = context.options;
+  const std::vector<ProxyKind> kinds = stochastic_kinds(context);
+  const double probe_share =
+      options.probe_passes > 0 ? std::min(1.0, static_cast<double>(options.probe_passes) / std::max(options.spp, 1)) : 1.0;
+  const double probes_per_segment = options.probe_rays * probe_share / std::max(options.shadow_rays, 1);
+  std::vector<double> ratios;
+  for (std::size_t i = 0; i < costs.work.size(); ++i)
+    ratios.push_back(eq8_predicted_ratio(kinds[i], costs.priors[i], costs.work[i], costs.noise, probes_per_segment,
+                                         options.probability_floor, options.cost_heuristic));
+  return ratios;
 }
 
 namespace {

@@ -1,7 +1,8 @@
 #pragma once
 // What a render learns from the scene's own samples before its first pass: eq. 8's optimal
 // probabilities, the learned control variate's modelled costs and priors (direct light),
-// and whether the learned control variate with occluder disks can pay at all (VPLs). Each
+// from the same costs where adaptive eq. 8 can pay (direct light, per instance), and
+// whether the learned control variate with occluder disks can pay at all (VPLs). Each
 // is seeded from the render's seed, so that the image stays a function of the options.
 
 #include <array>
@@ -34,6 +35,22 @@ SceneCorrectionCosts scene_correction_costs(const VisibilityContext& context);
 /// Whether the learned rule could give any instance's proxy to a pixel at the instance's
 /// average costs (context.correction_costs and correction_priors set).
 bool any_proxy_can_pay(const VisibilityContext& context);
+
+/// Adaptive eq. 8 with direct light: per instance, the predicted (variance x modelled work)
+/// of eq. 8 over exact visibility's for segments from the instance's points, at the
+/// instance's costs and ray types from scene_correction_costs(): the variance from eq. 16
+/// at the optimal probabilities of those ray types (with the cost heuristic when the
+/// options ask for it) added to the exact render's noise, the work with the probe rays
+/// (each a proxy query and a mesh query) shared among the point's shadow rays, and only in
+/// the probe passes' share of the passes. The render traces exactly from the points of an
+/// instance whose ratio is not below kLearnedPaysBelow. +infinity where an outside or
+/// inside proxy's ray types would need a term its kind leaves out.
+std::vector<double> adaptive_eq8_ratios(const VisibilityContext& context, const SceneCorrectionCosts& costs);
+/// One instance's ratio: its proxy's `kind` and rates, its segments' modelled `work`, the
+/// exact render's `noise` per segment, the probe rays per shadow ray, and the options'
+/// probability floor and cost heuristic.
+double eq8_predicted_ratio(ProxyKind kind, const CorrectionPrior& prior, const SegmentQueryCosts& work, double noise,
+                           double probes_per_segment, double floor, bool cost_heuristic);
 
 /// ProbabilityMode::learned with the control variate and occluder disks: what the
 /// scene-level choice between the control variate and exact visibility weighed.

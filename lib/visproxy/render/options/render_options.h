@@ -105,11 +105,12 @@ struct RenderOptions {
   /// (PointDisks), so that its cost follows the instances its segments pass, not all of
   /// them; same answers.
   std::size_t disk_lazy_from = 32;
-  /// Learned control variate with occluder disks: before the render, decide for the whole
-  /// scene whether the control variate can pay, and trace every segment exactly where it
-  /// cannot (RenderStats::disk_gate). false: always the control variate (to test the
-  /// estimator itself, or to compare with it).
-  bool disk_gate = true;
+  /// The gates before the render, which trace segments exactly where an estimator cannot
+  /// beat exact visibility: the learned control variate with occluder disks decides for
+  /// the whole scene (RenderStats::disk_gate), adaptive eq. 8 with direct light for the
+  /// points of each instance (adaptive_eq8_ratios(), RenderStats::learned_costs). false:
+  /// the estimator everywhere (to test the estimator itself, or to compare with it).
+  bool gate = true;
   double seconds = 0;  ///< stop after the pass that crosses this time (0: no limit)
   /// Called after each pass with the passes done and the time so far (progress display).
   std::function<void(int passes, double seconds)> on_pass = nullptr;

@@ -9,6 +9,7 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
   vpl_connections += o.vpl_connections, exact_tests += o.exact_tests, proxy_tests += o.proxy_tests,
       probe_rays += o.probe_rays;
   for (int i = 0; i < 3; ++i) eq8.terms[i] += o.eq8.terms[i];
+  eq8.traced_exactly += o.eq8.traced_exactly;
   control_variate.after_miss += o.control_variate.after_miss, control_variate.after_hit += o.control_variate.after_hit;
   control_variate.traced_exactly += o.control_variate.traced_exactly, control_variate.explored += o.control_variate.explored;
   bounds.unoccluded += o.bounds.unoccluded, bounds.occluded += o.bounds.occluded, bounds.traced += o.bounds.traced;
@@ -36,7 +37,8 @@ nlohmann::json RenderStats::to_json() const {
           {"stochastic_terms",
            {{"a_proxy_only", eq8.terms[0]},
             {"b_mesh_if_proxy_hit", eq8.terms[1]},
-            {"c_mesh_if_proxy_missed", eq8.terms[2]}}},
+            {"c_mesh_if_proxy_missed", eq8.terms[2]},
+            {"traced_exactly", eq8.traced_exactly}}},
           {"control_variate_corrections",
            {{"after_proxy_missed", control_variate.after_miss},
             {"after_proxy_hit", control_variate.after_hit},

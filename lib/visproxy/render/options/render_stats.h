@@ -20,6 +20,9 @@ struct RenderStats {
   std::uint64_t probe_rays = 0;       ///< adaptive probe segments (each tests proxy and mesh)
   struct TermChoice {
     std::uint64_t terms[3] = {0, 0, 0};  ///< times terms (a), (b), (c) were chosen
+    /// adaptive, direct light: segments traced exactly because eq. 8 cannot pay from the
+    /// points of their instance (the gate before the render)
+    std::uint64_t traced_exactly = 0;
   } eq8;                                 ///< stochastic, eq. 8
   struct ControlVariate {
     std::uint64_t after_miss = 0, after_hit = 0;  ///< exact corrections traced after the proxy missed / was hit

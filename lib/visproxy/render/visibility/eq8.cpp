@@ -1,6 +1,7 @@
 // Stochastic visibility, eq. 8 of Billen et al.: a term drawn with p1, p2, p3, then traced;
 // visibility splitting (eq. 27) traces the own instance exactly first.
 
+#include <cstdint>
 #include <vector>
 
 #include "visproxy/render/visibility/visibility.h"
@@ -44,6 +45,7 @@ class TermChoicePoint final : public PointVisibility {
   TermChoiceVisibility& shared_;
   ShadingPoint point_;
   Probabilities probabilities_, connection_probabilities_;
+  bool exact_ = false;  // the gate traces this point's segments exactly
 };
 
 class TermChoiceVisibility final : public Visibility {
@@ -62,6 +64,12 @@ class TermChoiceVisibility final : public Visibility {
 void TermChoicePoint::begin(const ShadingPoint& point) {
   point_ = point;
   const RenderOptions& options = shared_.context_.options;
+  const std::vector<std::uint8_t>& gate = shared_.context_.trace_exactly_from;
+  exact_ = !gate.empty() && gate[static_cast<std::size_t>(point.hit->instance)] != 0;
+  if (exact_) {
+    *point.p1_count += 1;  // the proxy alone never: p1 = 0
+    return;
+  }
   const ProxyKind kind = shared_.kinds_[static_cast<std::size_t>(point.hit->instance)];
   probabilities_ = equal_probabilities(kind);
   // Segments that do not end on a light prove nothing about outside or inside proxies that
@@ -88,12 +96,20 @@ void TermChoicePoint::begin(const ShadingPoint& point) {
 
 double TermChoicePoint::to_light(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
+  if (exact_) {
+    ++point_.stats->exact_tests, ++point_.stats->eq8.traced_exactly;
+    return shared_.context_.world.mesh_blocks(point_.position, end) ? 0.0 : 1.0;
+  }
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, probabilities_,
                                point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }
 
 double TermChoicePoint::connection(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
+  if (exact_) {
+    ++point_.stats->exact_tests, ++point_.stats->eq8.traced_exactly;
+    return shared_.context_.world.mesh_blocks(point_.position, end) ? 0.0 : 1.0;
+  }
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, connection_probabilities_,
                                point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }

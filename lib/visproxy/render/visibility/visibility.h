@@ -87,6 +87,9 @@ struct VisibilityContext {
   /// With correction_costs: per instance, what its proxy showed on segments traced before the
   /// render (the pixels' evidence starts from it).
   std::vector<CorrectionPrior> correction_priors;
+  /// Adaptive eq. 8's gate: per instance, 1 where the points of the instance trace every
+  /// segment exactly (adaptive_eq8_ratios() not below kLearnedPaysBelow); empty: none do.
+  std::vector<std::uint8_t> trace_exactly_from;
 };
 
 std::unique_ptr<Visibility> make_exact_visibility(const VisibilityContext& context);
