@@ -71,7 +71,7 @@ class OccluderDisks {
   /// is left out whole, with the clusters it heads.
   void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic);
   /// The same with the clusters' cones already made: those of `cones` from `offset` on, one
-  /// per cluster (bound_cones() of bounds that hold these clusters' in order).
+  /// per cluster in the clusters' order (bound_cones() of their bounds).
   void add(const std::vector<Sphere>& spheres, const std::vector<SphereCluster>& clusters, bool self_heuristic, const BoundCones& cones,
            std::size_t offset);
   /// The cones bound_cone() gives for every cluster of `bounds`, from this point, into
