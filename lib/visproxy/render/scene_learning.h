@@ -43,8 +43,9 @@ bool any_proxy_can_pay(const VisibilityContext& context);
 /// options ask for it) added to the exact render's noise, the work with the probe rays
 /// (each a proxy query and a mesh query) shared among the point's shadow rays, and only in
 /// the probe passes' share of the passes. The render traces exactly from the points of an
-/// instance whose ratio is not below kLearnedPaysBelow. +infinity where an outside or
-/// inside proxy's ray types would need a term its kind leaves out.
+/// instance whose ratio is not below kLearnedPaysBelow. The rates of a side the proxy's
+/// kind proves right (an outside proxy's misses, an inside proxy's hits) are taken as 0.
+/// +infinity where the pairs showed no noise or no exact work to weigh against.
 std::vector<double> adaptive_eq8_ratios(const VisibilityContext& context, const SceneCorrectionCosts& costs);
 /// One instance's ratio: its proxy's `kind` and rates, its segments' modelled `work`, the
 /// exact render's `noise` per segment, the probe rays per shadow ray, and the options'
