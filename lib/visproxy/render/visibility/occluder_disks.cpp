@@ -57,10 +57,7 @@ __attribute__((target_clones("avx2", "default"))) std::size_t ball_disks(const S
   const std::int64_t skip_close = heuristic ? -1 : 0;
   static_assert(sizeof(Sphere) == 4 * sizeof(double));
   const double* const b = balls[0].center.data();  // centre and radius: four packed doubles per ball
-  thread_local std::vector<std::int32_t> keeping;
-  keeping.resize(count);
-  std::int32_t* __restrict keep = keeping.data();
-  // v, |v|^2 and |v|^2 - R^2 go into the output arrays first.
+  // v, |v|^2 (negative for a ball left out) and |v|^2 - R^2 go into the output arrays first.
   for (std::size_t i = 0; i < count; ++i) {
     const double r = b[4 * i + 3];
     const double v0 = b[4 * i] - x0, v1 = b[4 * i + 1] - x1, v2 = b[4 * i + 2] - x2;
@@ -68,22 +65,23 @@ __attribute__((target_clones("avx2", "default"))) std::size_t ball_disks(const S
     const double squared = v0 * v0 + v1 * v1 + v2 * v2;
     const std::int64_t behind = along <= -r ? -1 : 0;  // behind the tangent plane
     const std::int64_t close = squared < 4 * r * r ? -1 : 0;  // t < 2R
-    keep[i] = static_cast<std::int32_t>(~(behind | (close & skip_close)));
+    const bool keep = (behind | (close & skip_close)) == 0;
     ux[i] = static_cast<float>(v0), uy[i] = static_cast<float>(v1), uz[i] = static_cast<float>(v2);
-    t_out[i] = static_cast<float>(squared);
+    t_out[i] = static_cast<float>(keep ? squared : -1.0);
     cos_gamma[i] = static_cast<float>(squared - r * r);
   }
   std::int32_t kept = 0;
   for (std::size_t i = 0; i < count; ++i) {
-    const float t = std::sqrt(t_out[i]), inverse = 1 / t, rest = cos_gamma[i];
+    const float squared = t_out[i], rest = cos_gamma[i];
+    const bool k = squared >= 0;
+    const float t = std::sqrt(k ? squared : 0.0f), inverse = 1 / t;
     const bool outside = rest > 0;  // else x inside the ball: every direction
-    const bool k = keep[i] != 0;
     const float a = outside ? ux[i] * inverse : 0.0f, c = outside ? uy[i] * inverse : 0.0f, d = outside ? uz[i] * inverse : 1.0f;
     const float cosine = outside ? std::sqrt(rest) * inverse : -2.0f;
     ux[i] = k ? a : 0.0f, uy[i] = k ? c : 0.0f, uz[i] = k ? d : 1.0f;
     cos_gamma[i] = k ? cosine : 2.0f;
     t_out[i] = k ? t : 0.0f;
-    kept -= keep[i];
+    kept += k ? 1 : 0;
   }
   used = count;
   while (used > 0 && cos_gamma[used - 1] == 2.0f) --used;
