@@ -115,7 +115,8 @@ struct RenderSession::State {
   VisibilityContext visibility_context;
   bool optimal = false;
   SceneCorrectionCosts correction_costs;
-  // The learned control variate where no instance's proxy can pay: exact visibility itself.
+  // Where a gate or the learned rule finds that no instance's proxy can pay: exact
+  // visibility itself.
   bool traced_exactly_everywhere = false;
   std::vector<double> eq8_ratios;  // adaptive eq. 8's gate, per instance
   nlohmann::json disk_gate;  // what the VPL control variate's scene-level choice weighed
