@@ -46,6 +46,9 @@ class TermChoicePoint final : public PointVisibility {
   ShadingPoint point_;
   Probabilities probabilities_, connection_probabilities_;
   bool exact_ = false;  // the gate traces this point's segments exactly
+
+  // A segment from a point the gate gave to exact visibility: the meshes' answer.
+  double traced_exactly(const Vertex& end);
 };
 
 class TermChoiceVisibility final : public Visibility {
@@ -60,6 +63,11 @@ class TermChoiceVisibility final : public Visibility {
   std::vector<ProxyKind> kinds_;  // per instance: the estimator's form for the rest of the scene
   std::vector<RayTypeCounts> pixel_probes_;
 };
+
+double TermChoicePoint::traced_exactly(const Vertex& end) {
+  ++point_.stats->exact_tests, ++point_.stats->eq8.traced_exactly;
+  return shared_.context_.world.mesh_blocks(point_.position, end) ? 0.0 : 1.0;
+}
 
 void TermChoicePoint::begin(const ShadingPoint& point) {
   point_ = point;
@@ -96,20 +104,14 @@ void TermChoicePoint::begin(const ShadingPoint& point) {
 
 double TermChoicePoint::to_light(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
-  if (exact_) {
-    ++point_.stats->exact_tests, ++point_.stats->eq8.traced_exactly;
-    return shared_.context_.world.mesh_blocks(point_.position, end) ? 0.0 : 1.0;
-  }
+  if (exact_) return traced_exactly(end);
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, probabilities_,
                                point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }
 
 double TermChoicePoint::connection(const Vertex& end) {
   const RenderOptions& options = shared_.context_.options;
-  if (exact_) {
-    ++point_.stats->exact_tests, ++point_.stats->eq8.traced_exactly;
-    return shared_.context_.world.mesh_blocks(point_.position, end) ? 0.0 : 1.0;
-  }
+  if (exact_) return traced_exactly(end);
   return stochastic_visibility(shared_.context_.world, point_.position, end, point_.hit->instance, connection_probabilities_,
                                point_.choices->uniform(), options.split, *point_.stats, point_.hit->own_mesh_clear_of(point_.position, end));
 }
