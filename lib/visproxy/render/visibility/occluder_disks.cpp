@@ -568,11 +568,15 @@ OccluderDiskIndex::OccluderDiskIndex(const RenderWorld& world, std::size_t insta
       continue;
     }
     has_spheres_[i] = 1, ++with;
-    for (const SphereCluster& cluster : world.occluder_clusters(i)) bounds_.push(cluster);
     ++with_spheres_[bit], with_bits_ |= instance_bit(i);
   }
   lazy_ = with >= lazy_from;
-  if (!lazy_) return;
+  if (!lazy_) {
+    // Points make every cluster's cone at once (prepare_occluder_disks).
+    for (std::size_t i = 0; i < instances; ++i)
+      for (const SphereCluster& cluster : world.occluder_clusters(i)) bounds_.push(cluster);
+    return;
+  }
   std::vector<BoundingBox> boxes;
   for (std::size_t i = 0; i < instances; ++i) {
     const std::vector<Sphere>& balls = world.occluder_spheres(i);

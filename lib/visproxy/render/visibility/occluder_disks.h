@@ -187,7 +187,7 @@ class OccluderDiskIndex {
   std::size_t instances_ = 0;
   bool lazy_ = false;
   std::vector<std::uint8_t> has_spheres_;
-  ClusterBounds bounds_;  // every instance's clusters, one instance's after another
+  ClusterBounds bounds_;  // not lazy: every instance's clusters, one instance's after another
   std::array<std::uint32_t, 31> with_spheres_{}, without_spheres_{};  // instances per mask bit
   unsigned with_bits_ = 0, without_bits_ = 0;
   struct Run {
