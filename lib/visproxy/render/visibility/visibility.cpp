@@ -46,7 +46,9 @@ RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const Shad
   const RenderOptions& options = context.options;
   RayTypeCounts local;
   RayTypeCounts& counts = pixel_counts ? *pixel_counts : local;
-  if (options.probe_passes == 0 || point.pass < options.probe_passes) {
+  // Without area lights (VPLs given by the caller) there is nothing to probe: the counts
+  // stay empty, and the probabilities from them equal.
+  if (!context.lights.empty() && (options.probe_passes == 0 || point.pass < options.probe_passes)) {
     const int own = point.hit->instance;
     const InstanceFilter rest{.skip = options.split ? own : -1, .only = -1};
     const Vertex& x = point.position;
