@@ -758,5 +758,95 @@ TEST(OccluderDisks, SelfShadowingModes) {
   }
 }
 
+
+// Adaptive eq. 8 with VPLs weighs each instance's points before the render (Eq8Gate). On
+// the crowd far from the origin (60 cheap meshes, each under a sphere set wrong for many
+// connections), eq. 8 cannot pay anywhere: the render gives exact's image bit for bit,
+// draws no term and probes nothing. Without the gate, eq. 8 runs.
+TEST(VplIntegrator, AdaptiveEq8TracesExactlyWhereItCannotPay) {
+  const CrowdScene c = disk_crowd(Vertex(2.0e5, -3.0e5, 1.0e4));
+  const RenderWorld world(c.scene, c.proxies);
+  RenderOptions options{.integrator = IntegratorKind::vpl, .spp = 4, .seed = 9, .vpls = 64, .bounces = 2};
+  const RenderResult exact = render(c.scene, world, options);
+  options.visibility = VisibilityMode::stochastic;
+  options.estimator = StochasticEstimator::term_choice;
+  options.probabilities = ProbabilityMode::adaptive;
+  const RenderResult gated = render(c.scene, world, options);
+  ASSERT_TRUE(gated.stats.eq8_gate.is_object());
+  const nlohmann::json& instances = gated.stats.eq8_gate["instances"];
+  ASSERT_EQ(instances.size(), c.scene.instances.size());
+  std::size_t weighed = 0;
+  for (const nlohmann::json& instance : instances)
+    if (!instance["predicted_ratio"].is_null()) {
+      EXPECT_GE(instance["predicted_ratio"].get<double>(), kLearnedPaysBelow) << instance.dump();
+      ++weighed;
+    }
+  EXPECT_GE(weighed, 10u);  // the floor and the balls the pairs met
+  EXPECT_EQ(gated.image.pixels, exact.image.pixels);
+  EXPECT_EQ(gated.stats.exact_tests, exact.stats.exact_tests);
+  EXPECT_EQ(gated.stats.eq8.traced_exactly, gated.stats.exact_tests);
+  EXPECT_EQ(gated.stats.eq8.terms[0] + gated.stats.eq8.terms[1] + gated.stats.eq8.terms[2], 0u);
+  EXPECT_EQ(gated.stats.probe_rays, 0u);
+  EXPECT_TRUE(exact.stats.eq8_gate.is_null());
+
+  options.gate = false;
+  const RenderResult ungated = render(c.scene, world, options);
+  EXPECT_TRUE(ungated.stats.eq8_gate.is_null());
+  EXPECT_GT(ungated.stats.eq8.terms[0], 0u);
+  EXPECT_GT(ungated.stats.probe_rays, 0u);
+}
+
+// Where a proxy stands in well for a heavy mesh (a ball of 82 K triangles with a ball
+// just inside it as its proxy) and connections go one by one, the gate keeps eq. 8 for the
+// floor's points, whose rest of the scene is that ball: their terms are drawn. The
+// ball's own points, whose rest is the floor without a proxy, are weighed apart. Given
+// VPLs and no area light, adaptive probes nothing (it used to sample an empty light list).
+// With the proxy beside the ball, the variance it would add decides against it.
+TEST(VplIntegrator, AdaptiveEq8GateKeepsEq8WhereItPays) {
+  DiskScene s = disk_scene();
+  s.scene.meshes[1].mesh = sphere_set_mesh({{{0, 0, 2}, 1.0}}, 6);
+  s.proxies[1].stochastic->spheres = {{{0, 0, 2}, 0.9999}};
+  for (int i = 0; i < 16; ++i)
+    for (int j = 0; j < 16; ++j)
+      s.lights.push_back({{-2 + 0.25 * i, -2 + 0.25 * j, 5}, {0, 0, -1}, Color::Constant(0.02), Color::Constant(1 / std::numbers::pi), -1, 1});
+  RenderOptions options{.integrator = IntegratorKind::vpl, .visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive,
+                        .estimator = StochasticEstimator::term_choice, .spp = 16, .seed = 4, .virtual_point_lights = &s.lights};
+  options.group_connections = false;
+  options.probe_passes = 1;
+  options.probability_floor = 0.01;
+  {
+    // Given VPLs and no area light: nothing to probe, equal probabilities.
+    const RenderWorld unlit(s.scene, s.proxies);
+    const RenderResult r = render(s.scene, unlit, options);
+    EXPECT_TRUE(all_finite(r.image));
+    EXPECT_EQ(r.stats.probe_rays, 0u);
+  }
+  s.scene.lights.push_back(square_light({-0.5, -0.5, 6}, {0, 1, 0}, {1, 0, 0}, Color::Constant(20)));
+  const RenderWorld world(s.scene, s.proxies);
+  const RenderResult r = render(s.scene, world, options);
+  ASSERT_TRUE(r.stats.eq8_gate.is_object());
+  std::printf("eq8 gate: %s\n", r.stats.eq8_gate.dump().c_str());
+  const nlohmann::json& floor = r.stats.eq8_gate["instances"][0];
+  ASSERT_FALSE(floor["predicted_ratio"].is_null());
+  EXPECT_LT(floor["predicted_ratio"].get<double>(), kLearnedPaysBelow);
+  EXPECT_GT(r.stats.eq8.terms[0], 0u);
+  EXPECT_GT(r.stats.probe_rays, 0u);
+
+  // The same heavy ball with its proxy beside it: as cheap, but wrong for most connections
+  // it meets. The work alone would pay; the variance it adds does not, and the render is
+  // exact's, bit for bit.
+  s.proxies[1].stochastic->spheres = {{{1.5, 0, 2}, 0.8}};
+  const RenderWorld beside(s.scene, s.proxies);
+  const RenderResult gated = render(s.scene, beside, options);
+  std::printf("proxy beside the ball: %s\n", gated.stats.eq8_gate.dump().c_str());
+  const nlohmann::json& weighed = gated.stats.eq8_gate["instances"][0];
+  EXPECT_LT(weighed["work_ratio"].get<double>(), kLearnedPaysBelow);
+  EXPECT_GE(weighed["predicted_ratio"].get<double>(), kLearnedPaysBelow);
+  RenderOptions exact_options = options;
+  exact_options.visibility = VisibilityMode::exact;
+  EXPECT_EQ(gated.image.pixels, render(s.scene, beside, exact_options).image.pixels);
+  EXPECT_EQ(gated.stats.eq8.traced_exactly, gated.stats.exact_tests);
+}
+
 }  // namespace
 }  // namespace visproxy

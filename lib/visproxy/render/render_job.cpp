@@ -190,8 +190,8 @@ std::vector<RenderOption> make_options() {
                    [](RenderJob& j) -> bool& { return j.options.cost_heuristic; }));
   o.push_back(flag("gate", "--no-gate",
                    "stochastic: render the estimator everywhere, even where the gate before the render finds that it "
-                   "cannot beat exact visibility (adaptive eq8 with direct light, for each instance's points; the "
-                   "learned control variate with VPLs and occluder disks, for the scene), as the paper's estimators are",
+                   "cannot beat exact visibility (adaptive eq8, for each instance's points; the learned control variate "
+                   "with VPLs and occluder disks, for the scene), as the paper's estimators are",
                    false, [](RenderJob& j) -> bool& { return j.options.gate; }));
   o.push_back(integer(
       "probe_passes", "--probe-passes",

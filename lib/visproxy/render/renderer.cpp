@@ -120,6 +120,7 @@ struct RenderSession::State {
   bool traced_exactly_everywhere = false;
   std::vector<double> eq8_ratios;  // adaptive eq. 8's gate, per instance
   nlohmann::json disk_gate;  // what the VPL control variate's scene-level choice weighed
+  nlohmann::json eq8_gate;   // what adaptive eq. 8's choice per instance weighed with VPLs
   std::unique_ptr<Visibility> visibility;
   std::unique_ptr<IntegratorContext> integrator_context;
   std::unique_ptr<Integrator> integrator;
@@ -215,6 +216,17 @@ RenderSession::RenderSession(const Scene& scene, const RenderWorld& world, const
       s.traced_exactly_everywhere = std::all_of(exact.begin(), exact.end(), [](std::uint8_t e) { return e != 0; });
     }
   }
+  // Adaptive eq. 8 with VPLs: the same per instance, weighed on camera samples shaded by
+  // the VPL integrator (its connections are what eq. 8 pays for).
+  if (stochastic && options.probabilities == ProbabilityMode::adaptive && options.estimator == StochasticEstimator::term_choice &&
+      options.integrator == IntegratorKind::vpl && options.gate) {
+    const Eq8Gate gate = adaptive_eq8_vpl_gate(s.visibility_context);
+    s.eq8_gate = gate.to_json();
+    s.eq8_ratios = gate.ratios();
+    std::vector<std::uint8_t>& exact = s.visibility_context.trace_exactly_from;
+    for (const double ratio : s.eq8_ratios) exact.push_back(ratio >= kLearnedPaysBelow ? 1 : 0);
+    s.traced_exactly_everywhere = std::all_of(exact.begin(), exact.end(), [](std::uint8_t e) { return e != 0; });
+  }
   // Where no evidence could make any instance's proxy pay at its average modelled costs,
   // the render traces every segment exactly: exact visibility does so from the first
   // segment, without the per-pixel bookkeeping.
@@ -291,6 +303,7 @@ RenderResult RenderSession::result() const {
     (s.options.estimator == StochasticEstimator::term_choice ? result.stats.eq8.traced_exactly : result.stats.control_variate.traced_exactly) =
         result.stats.exact_tests;
   result.stats.disk_gate = s.disk_gate;
+  result.stats.eq8_gate = s.eq8_gate;
   const SceneCorrectionCosts& costs = s.correction_costs;
   if (!costs.costs.empty()) {
     nlohmann::json instances = nlohmann::json::array();

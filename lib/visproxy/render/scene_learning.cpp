@@ -159,13 +159,90 @@ std::vector<double> adaptive_eq8_ratios(const VisibilityContext& context, const 
 
 namespace {
 
+// The gates of the VPL integrator's estimators (scene_disk_gate, adaptive_eq8_vpl_ratios)
+// weigh them on kGatePairs pairs of camera samples, each pair in one pixel of a
+// kGateSide^2 grid over the image, shaded by the render's integrator with every segment
+// answered exactly by a probe that records what the estimator would have seen.
+constexpr std::size_t kGateSide = 12;
+constexpr std::size_t kGatePairs = kGateSide * kGateSide;
+
+struct GateSample {
+  bool shaded = false;
+  int instance = -1;                // of the shaded point
+  std::size_t first = 0, last = 0;  // its records
+  double camera_work = 0;           // its camera ray and shading (camera_sample_work)
+  double own_work = 0;              // what the estimator spends on the point itself (Probe::point_work)
+  double pair_noise = 0;            // (x_a - x_b)^2 / 2 over its pair: the exact render's variance there
+};
+
+// Shades the pairs with `probe` (a PointVisibility with records(), the records made so far,
+// and point_work(), the last point's own work), the pixels and samples seeded from `seed`
+// and the estimators' choices from the render's seed: two samples per pair,
+// passes 0 and 1 of its pixel. `noise` gets the mean over pairs of (x_a - x_b)^2 / 2.
+template <typename Probe>
+std::vector<GateSample> shade_gate_pairs(const VisibilityContext& context, Probe& probe, std::uint64_t seed, double& noise) {
+  const Scene& scene = context.scene;
+  const RenderWorld& world = context.world;
+  // An integrator of its own: integrators may keep per-pixel sums of what they shaded.
+  const std::unique_ptr<Integrator> integrator = make_integrator(IntegratorContext{scene, world, context.options, context.lights});
+  const CameraRays camera(scene.camera);
+  const Vertex eye = camera.origin();
+  std::vector<GateSample> samples(2 * kGatePairs);
+  RenderStats stats;
+  double p1_sum = 0, p1_count = 0, noise_sum = 0;
+  PixelRandom random(seed, 0, 0);
+  PixelRandom choices(context.options.seed ^ 0x63686F69636573ULL, 0, 0);
+  const int width = scene.camera.width, height = scene.camera.height;
+  for (std::size_t pair = 0; pair < kGatePairs; ++pair) {
+    const double cx = static_cast<double>(pair % kGateSide), cy = static_cast<double>(pair / kGateSide);
+    const int px = std::min(width - 1, static_cast<int>((cx + random.uniform()) / kGateSide * width));
+    const int py = std::min(height - 1, static_cast<int>((cy + random.uniform()) / kGateSide * height));
+    std::array<double, 2> value{};
+    for (std::size_t k = 0; k < 2; ++k) {
+      GateSample& sample = samples[2 * pair + k];
+      const double jx = random.uniform(), jy = random.uniform();
+      const std::optional<SurfaceHit> hit = world.intersect(eye, camera.direction(px + jx, py + jy));
+      if (!hit) continue;
+      if (hit->light >= 0) {
+        const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
+        if (hit->light_front || light.two_sided) value[k] = light.radiance.mean();
+        continue;
+      }
+      const Vertex position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
+      const ShadingPoint point{.pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px),
+                               .pass = static_cast<int>(k),
+                               .hit = &*hit,
+                               .position = position,
+                               .choices = &choices,
+                               .stats = &stats,
+                               .p1_sum = &p1_sum,
+                               .p1_count = &p1_count};
+      const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
+      sample.shaded = true;
+      sample.instance = hit->instance;
+      sample.first = probe.records();
+      probe.begin(point);
+      value[k] = integrator->shade(point, brdf, random, probe).mean();
+      probe.end();
+      sample.last = probe.records();
+      sample.camera_work = camera_sample_work(world, eye, position);
+      sample.own_work = probe.point_work();
+    }
+    const double n = (value[0] - value[1]) * (value[0] - value[1]) / 2;
+    samples[2 * pair].pair_noise = samples[2 * pair + 1].pair_noise = n;
+    noise_sum += n;
+  }
+  noise = noise_sum / kGatePairs;
+  return samples;
+}
+
 // ProbabilityMode::learned with the control variate and occluder disks as V' (the VPL
 // integrator with sphere sets): whether the control variate can pay on this scene at all.
 // Its corrections are chosen per pixel from the pixel's evidence alone, blind to cost, so
 // where the disks' set-up and tests cost more than the meshes they stand for, or the disks
 // disagree with the meshes often, the control variate costs more than exact visibility.
-// Before the render, kDiskGatePairs pairs of camera samples (each pair in one pixel of a
-// kDiskGateSide^2 grid over the image, seeded from the render's seed) are shaded by the
+// Before the render, kGatePairs pairs of camera samples (each pair in one pixel of a
+// kGateSide^2 grid over the image, seeded from the render's seed) are shaded by the
 // render's integrator with every segment traced exactly; each segment's disk answer, mesh
 // answers, modelled work and contribution (PointVisibility::contributions) are kept, and
 // segments to area lights are traced exactly, as the control variate traces them. Then:
@@ -190,8 +267,6 @@ namespace {
 // work_exact, the rule learned_choice() applies to direct light. Without noise in the
 // pairs (T = 0), it keeps the control variate only where A = 0 and work_cv is below
 // kLearnedPaysBelow x work_exact.
-constexpr std::size_t kDiskGateSide = 12;
-constexpr std::size_t kDiskGatePairs = kDiskGateSide * kDiskGateSide;
 constexpr int kDiskGatePasses = 16;
 constexpr double kDiskSetupWork = 1.5;
 constexpr double kDiskTestWork = 0.035;
@@ -272,8 +347,9 @@ class DiskGateProbe final : public PointVisibility {
     if (luminance.size() != records_.size() - first_) throw Error("render: an integrator reported contributions for other segments than it asked");
     for (std::size_t i = 0; i < luminance.size(); ++i) records_[first_ + i].contribution = static_cast<float>(luminance[i]);
   }
-  // The disks the point made (with a lazy index, those its segments asked for).
-  std::size_t balls() const { return disks_.size(); }
+  std::size_t records() const { return records_.size(); }
+  // The point's set-up: the disks it made (with a lazy index, those its segments asked for).
+  double point_work() const { return kDiskSetupWork * static_cast<double>(disks_.size()); }
 
  private:
   SegmentQueryCosts costs(const Vertex& end) const {
@@ -305,7 +381,7 @@ class DiskGateProbe final : public PointVisibility {
 }  // namespace
 
 nlohmann::json DiskGate::to_json() const {
-  return {{"pairs", kDiskGatePairs},     {"passes", passes},
+  return {{"pairs", kGatePairs},     {"passes", passes},
           {"weighed", weighed},          {"noise_per_sample", noise},
           {"added_variance_per_sample", added}, {"variance_ratio", variance_ratio},
           {"work_ratio", work_ratio},    {"mean_correction_probability", corrections},
@@ -313,78 +389,26 @@ nlohmann::json DiskGate::to_json() const {
 }
 
 DiskGate scene_disk_gate(const VisibilityContext& context) {
-  const Scene& scene = context.scene;
-  const RenderWorld& world = context.world;
   const RenderOptions& options = context.options;
-  const OccluderDiskIndex index(world, scene.instances.size(), options.disk_lazy_from);
-  // An integrator of its own: integrators may keep per-pixel sums of what they shaded.
-  const std::unique_ptr<Integrator> integrator = make_integrator(IntegratorContext{scene, world, options, context.lights});
-  const CameraRays camera(scene.camera);
-  const Vertex eye = camera.origin();
+  const OccluderDiskIndex index(context.world, context.scene.instances.size(), options.disk_lazy_from);
   std::vector<DiskGateRecord> records;
   DiskGateProbe probe(context, index, records);
-  struct Sample {
-    bool shaded = false;
-    std::size_t first = 0, last = 0;  // its records
-    double camera_work = 0, setup_work = 0;
-  };
-  std::vector<Sample> samples(2 * kDiskGatePairs);
-  RenderStats stats;
-  double p1_sum = 0, p1_count = 0, noise = 0;
-  PixelRandom random(options.seed ^ 0x6469736B67617465ULL, 0, 0);
-  PixelRandom choices(options.seed ^ 0x63686F69636573ULL, 0, 0);
-  const int width = scene.camera.width, height = scene.camera.height;
-  // The pairs' pixels are stratified: one in each cell of a kDiskGateSide^2 grid over the image.
-  for (std::size_t pair = 0; pair < kDiskGatePairs; ++pair) {
-    const double cx = static_cast<double>(pair % kDiskGateSide), cy = static_cast<double>(pair / kDiskGateSide);
-    const int px = std::min(width - 1, static_cast<int>((cx + random.uniform()) / kDiskGateSide * width));
-    const int py = std::min(height - 1, static_cast<int>((cy + random.uniform()) / kDiskGateSide * height));
-    std::array<double, 2> value{};
-    for (std::size_t k = 0; k < 2; ++k) {
-      Sample& sample = samples[2 * pair + k];
-      const double jx = random.uniform(), jy = random.uniform();
-      const std::optional<SurfaceHit> hit = world.intersect(eye, camera.direction(px + jx, py + jy));
-      if (!hit) continue;
-      if (hit->light >= 0) {
-        const AreaLight& light = scene.lights[static_cast<std::size_t>(hit->light)];
-        if (hit->light_front || light.two_sided) value[k] = light.radiance.mean();
-        continue;
-      }
-      const Vertex position = hit->position + world.surface_offset(hit->position, hit->distance) * hit->normal;
-      const ShadingPoint point{.pixel = static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px),
-                               .pass = 0,
-                               .hit = &*hit,
-                               .position = position,
-                               .choices = &choices,
-                               .stats = &stats,
-                               .p1_sum = &p1_sum,
-                               .p1_count = &p1_count};
-      const Color brdf = scene.instances[static_cast<std::size_t>(hit->instance)].albedo / std::numbers::pi;
-      sample.shaded = true;
-      sample.first = records.size();
-      probe.begin(point);
-      value[k] = integrator->shade(point, brdf, random, probe).mean();
-      probe.end();
-      sample.last = records.size();
-      sample.camera_work = camera_sample_work(world, eye, position);
-      sample.setup_work = kDiskSetupWork * static_cast<double>(probe.balls());
-    }
-    noise += (value[0] - value[1]) * (value[0] - value[1]) / 2;
-  }
+  double noise = 0;
+  const std::vector<GateSample> samples = shade_gate_pairs(context, probe, options.seed ^ 0x6469736B67617465ULL, noise);
   DiskGate gate;
   if (records.empty()) return gate;  // no segment to weigh
   const CorrectionOptions correction{.scale = options.correction_scale, .floor = options.probability_floor};
   const int passes = std::clamp(options.spp, 1, kDiskGatePasses);
   double work_exact = 0, work_cv = 0, added = 0, probability_sum = 0, probability_count = 0;
   PixelRandom draws(options.seed ^ 0x7265706C6179ULL, 0, 0);
-  for (std::size_t pair = 0; pair < kDiskGatePairs; ++pair) {
+  for (std::size_t pair = 0; pair < kGatePairs; ++pair) {
     CorrectionEvidence evidence;  // the pixel's, as the render starts it
     for (int pass = 0; pass < passes; ++pass) {
-      const Sample& sample = samples[2 * pair + static_cast<std::size_t>(pass % 2)];
+      const GateSample& sample = samples[2 * pair + static_cast<std::size_t>(pass % 2)];
       if (!sample.shaded) continue;
       const CorrectionProbabilities q = correction_probabilities(ProxyKind::general, evidence, correction);
       work_exact += sample.camera_work;
-      work_cv += sample.camera_work + sample.setup_work;
+      work_cv += sample.camera_work + sample.own_work;
       for (std::size_t r = sample.first; r < sample.last; ++r) {
         const DiskGateRecord& record = records[r];
         work_exact += record.exact_work;
@@ -403,8 +427,8 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
     }
   }
   gate.passes = passes;
-  gate.noise = noise / kDiskGatePairs;
-  gate.added = added / (static_cast<double>(kDiskGatePairs) * passes);
+  gate.noise = noise;
+  gate.added = added / (static_cast<double>(kGatePairs) * passes);
   gate.work_ratio = work_cv / work_exact;
   gate.corrections = probability_count > 0 ? probability_sum / probability_count : 0.0;
   gate.weighed = gate.noise > 0;
@@ -415,6 +439,166 @@ DiskGate scene_disk_gate(const VisibilityContext& context) {
     // Exact answers without noise: the control variate only where it adds none and costs
     // less (variance_ratio stays 1: no ratio to take).
     gate.trace_exactly = gate.added > 0 || !(gate.work_ratio < kLearnedPaysBelow);
+  }
+  return gate;
+}
+
+}  // namespace visproxy
+
+namespace visproxy {
+namespace {
+
+// Adaptive eq. 8 with VPLs (adaptive_eq8_vpl_gate): a shadow ray that eq. 8 answers alone
+// costs this much more, per unit of modelled work, than one of a point's connections that
+// exact visibility traces in packets: `visproxy-bench-vpl` puts single rays at 1.2-1.6x
+// the packets' time on the armadillo and menagerie rooms.
+constexpr double kSingleRayWork = 1.4;
+
+struct Eq8GateRecord {
+  bool connection = false;  // a connection (packets for exact visibility), else a segment to a light
+  bool own_blocked = false;
+  std::uint8_t type = 0;     // RayTypeCounts' index: mesh and proxy of the rest blocked, ...
+  std::uint32_t point = 0;   // the probabilities of its point (Eq8GateProbe::probabilities)
+  float exact_work = 0, proxy_work = 0, correction_work = 0;
+  float contribution = 0;  // luminance, when visible
+};
+
+// Answers exactly, recording what eq. 8 would have seen: each segment's ray type against the
+// rest of the scene, its point's probabilities (drawn as the render draws them, probes
+// included), its modelled work and its contribution.
+class Eq8GateProbe final : public PointVisibility {
+ public:
+  Eq8GateProbe(const VisibilityContext& context, std::vector<Eq8GateRecord>& records)
+      : context_(context), kinds_(stochastic_kinds(context)), records_(records) {}
+  void begin(const ShadingPoint& point) override {
+    point_ = point;
+    first_ = records_.size();
+    if (point.pass == 0) pixel_probes_ = RayTypeCounts{};  // a new pair's pixel
+    const std::uint64_t probes_before = point.stats->probe_rays;
+    const ProxyKind kind = kinds_[static_cast<std::size_t>(point.hit->instance)];
+    probabilities.push_back(
+        eq8_point_probabilities(context_, kind, point, context_.options.probe_passes > 0 ? &pixel_probes_ : nullptr));
+    probes_ = static_cast<double>(point.stats->probe_rays - probes_before);
+  }
+  double to_light(const Vertex& end) override { return record(end, false); }
+  double connection(const Vertex& end) override { return record(end, true); }
+  bool wants_contributions() const override { return true; }
+  void contributions(std::span<const double> luminance) override {
+    if (luminance.size() != records_.size() - first_) throw Error("render: an integrator reported contributions for other segments than it asked");
+    for (std::size_t i = 0; i < luminance.size(); ++i) records_[first_ + i].contribution = static_cast<float>(luminance[i]);
+  }
+  void end() override {
+    // The probes' work: each a proxy query and a mesh query of the rest of the scene, as
+    // single rays, costed as the point's segments to lights are on average (its connections
+    // where it has none).
+    double sum = 0, count = 0;
+    for (const bool connections : {false, true}) {
+      for (std::size_t r = first_; r < records_.size(); ++r)
+        if (records_[r].connection == connections) sum += records_[r].proxy_work + records_[r].correction_work, count += 1;
+      if (count > 0) break;
+    }
+    const double per_probe = count > 0 ? sum / count : 2 * kQueryWork;
+    point_work_ = kSingleRayWork * probes_ * per_probe;
+  }
+  std::size_t records() const { return records_.size(); }
+  double point_work() const { return point_work_; }
+
+  std::vector<Eq8Probabilities> probabilities;  // per point begun
+
+ private:
+  double record(const Vertex& end, bool connection) {
+    RenderStats uncounted;
+    const ProxyAnswer answer = proxy_answer(context_.world, point_.position, end, point_.hit->instance, context_.options.split,
+                                            uncounted, point_.hit->own_mesh_clear_of(point_.position, end));
+    const bool mesh = !answer.own_blocks && context_.world.mesh_blocks(point_.position, end, answer.rest);
+    const SegmentQueryCosts c =
+        shadow_segment_costs(context_.world, point_.position, end, point_.hit->instance, context_.options.split);
+    Eq8GateRecord r;
+    r.connection = connection;
+    r.own_blocked = answer.own_blocks;
+    r.type = static_cast<std::uint8_t>(mesh ? (answer.proxy_blocked ? 0 : 1) : (answer.proxy_blocked ? 2 : 3));
+    r.point = static_cast<std::uint32_t>(probabilities.size() - 1);
+    r.exact_work = static_cast<float>(c.exact), r.proxy_work = static_cast<float>(c.proxy),
+    r.correction_work = static_cast<float>(c.correction);
+    records_.push_back(r);
+    return answer.own_blocks || mesh ? 0.0 : 1.0;
+  }
+
+  const VisibilityContext& context_;
+  std::vector<ProxyKind> kinds_;
+  std::vector<Eq8GateRecord>& records_;
+  std::size_t first_ = 0;
+  ShadingPoint point_;
+  RayTypeCounts pixel_probes_;
+  double probes_ = 0, point_work_ = 0;
+};
+
+}  // namespace
+
+nlohmann::json Eq8Gate::to_json() const {
+  nlohmann::json rows = nlohmann::json::array();
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    const Instance& g = instances[i];
+    rows.push_back({{"instance", i},
+                    {"samples", g.samples},
+                    {"noise", g.noise},
+                    {"added_variance", g.added},
+                    {"work_ratio", g.work_exact > 0 ? nlohmann::json(g.work_eq8 / g.work_exact) : nlohmann::json(nullptr)},
+                    {"predicted_ratio", std::isfinite(g.ratio) ? nlohmann::json(g.ratio) : nlohmann::json(nullptr)}});
+  }
+  return {{"pairs", kGatePairs}, {"instances", rows}};
+}
+
+std::vector<double> Eq8Gate::ratios() const {
+  std::vector<double> r;
+  for (const Instance& g : instances) r.push_back(g.ratio);
+  return r;
+}
+
+Eq8Gate adaptive_eq8_vpl_gate(const VisibilityContext& context) {
+  const RenderOptions& options = context.options;
+  std::vector<Eq8GateRecord> records;
+  Eq8GateProbe probe(context, records);
+  double noise = 0;
+  const std::vector<GateSample> samples = shade_gate_pairs(context, probe, options.seed ^ 0x6571386761746573ULL, noise);
+  // With probe_passes > 0 the render probes in its first passes only, the pairs in their
+  // first samples (passes 0 and 1).
+  const double render_share = options.probe_passes > 0 ? std::min(1.0, static_cast<double>(options.probe_passes) / std::max(options.spp, 1)) : 1.0;
+  const double pair_share = options.probe_passes > 0 ? std::min(1.0, static_cast<double>(options.probe_passes) / 2) : 1.0;
+  Eq8Gate gate;
+  gate.instances.resize(context.scene.instances.size());
+  for (const GateSample& sample : samples) {
+    if (!sample.shaded) continue;
+    Eq8Gate::Instance& g = gate.instances[static_cast<std::size_t>(sample.instance)];
+    g.samples += 1;
+    g.noise += sample.pair_noise;
+    g.work_exact += sample.camera_work;
+    g.work_eq8 += sample.camera_work + sample.own_work * render_share / pair_share;
+    for (std::size_t r = sample.first; r < sample.last; ++r) {
+      const Eq8GateRecord& record = records[r];
+      g.work_exact += record.exact_work;
+      const bool single = record.connection && options.group_connections;  // exact traces it in a packet
+      const double factor = single ? kSingleRayWork : 1.0;
+      if (record.own_blocked) {
+        g.work_eq8 += factor * record.proxy_work;
+        continue;
+      }
+      const Eq8Probabilities& point = probe.probabilities[record.point];
+      const Probabilities& p = record.connection ? point.connection : point.to_light;
+      const bool proxy_blocked = record.type == 0 || record.type == 2;
+      g.work_eq8 += factor * (record.proxy_work + (proxy_blocked ? p.p2 : p.p3) * record.correction_work);
+      RayTypeFractions one;
+      one.f[record.type] = 1;
+      g.added += static_cast<double>(record.contribution) * record.contribution * estimator_variance(one, p);
+    }
+  }
+  for (Eq8Gate::Instance& g : gate.instances) {
+    if (g.samples == 0 || !(g.work_exact > 0)) continue;  // nothing seen: +infinity, traced exactly
+    if (g.noise > 0)
+      g.ratio = (g.noise + g.added) * g.work_eq8 / (g.noise * g.work_exact);
+    else if (g.added == 0)
+      g.ratio = g.work_eq8 / g.work_exact;  // no noise either way: the work alone
+    if (!std::isfinite(g.ratio)) g.ratio = std::numeric_limits<double>::infinity();
   }
   return gate;
 }

@@ -1,11 +1,13 @@
 #pragma once
 // What a render learns from the scene's own samples before its first pass: eq. 8's optimal
 // probabilities, the learned control variate's modelled costs and priors (direct light),
-// from the same costs where adaptive eq. 8 can pay (direct light, per instance), and
-// whether the learned control variate with occluder disks can pay at all (VPLs). Each
+// from the same costs where adaptive eq. 8 can pay (direct light, per instance), and, with
+// VPLs, whether the learned control variate with occluder disks can pay at all and where
+// adaptive eq. 8 can (per instance). Each
 // is seeded from the render's seed, so that the image stays a function of the options.
 
 #include <array>
+#include <limits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -67,5 +69,35 @@ struct DiskGate {
   nlohmann::json to_json() const;  ///< RenderStats::disk_gate
 };
 DiskGate scene_disk_gate(const VisibilityContext& context);
+
+/// Adaptive eq. 8 with the VPL integrator: per instance, the predicted (variance x modelled
+/// work) of eq. 8 over exact visibility's for the camera samples that find the instance.
+/// Before the render, the disk gate's pairs of camera samples are shaded by the render's
+/// integrator with every segment traced exactly, and each segment's ray type (its proxy
+/// and mesh answers against the rest of the scene), modelled work and contribution are
+/// kept, with its point's probabilities as the render would draw them (probe segments
+/// included). Per instance, over the samples that found it: T, the exact render's
+/// variance (each sample's pair's (x_a - x_b)^2 / 2); A, the variance eq. 8 adds, the sum
+/// of contribution^2 x eq. 16's variance for the segment's ray type; exact's work, the
+/// camera samples and the segments' meshes; eq. 8's, the camera samples, the proxy queries,
+/// the meshes its terms trace (p2 behind a proxy hit, p3 behind a miss) and the probes. A
+/// connection that exact visibility traces in a packet costs eq. 8 kSingleRayWork times
+/// its modelled work. The render traces exactly from the points of an instance whose
+/// (T + A) x work_eq8 / (T x work_exact) is not below kLearnedPaysBelow.
+struct Eq8Gate {
+  struct Instance {
+    std::size_t samples = 0;  ///< camera samples that found the instance
+    double noise = 0;         ///< T, summed over those samples
+    double added = 0;         ///< A, summed over them
+    double work_exact = 0, work_eq8 = 0;
+    /// (T + A) x work_eq8 / (T x work_exact); work_eq8 / work_exact where neither adds
+    /// variance; +infinity where no sample found the instance, or T = 0 < A.
+    double ratio = std::numeric_limits<double>::infinity();
+  };
+  std::vector<Instance> instances;
+  std::vector<double> ratios() const;
+  nlohmann::json to_json() const;  ///< RenderStats::eq8_gate
+};
+Eq8Gate adaptive_eq8_vpl_gate(const VisibilityContext& context);
 
 }  // namespace visproxy

@@ -107,8 +107,9 @@ struct RenderOptions {
   std::size_t disk_lazy_from = 32;
   /// The gates before the render, which trace segments exactly where an estimator cannot
   /// beat exact visibility: the learned control variate with occluder disks decides for
-  /// the whole scene (RenderStats::disk_gate), adaptive eq. 8 with direct light for the
-  /// points of each instance (adaptive_eq8_ratios(), RenderStats::learned_costs). false:
+  /// the whole scene (RenderStats::disk_gate), adaptive eq. 8 for the points of each
+  /// instance (with direct light adaptive_eq8_ratios(), RenderStats::learned_costs; with
+  /// VPLs adaptive_eq8_vpl_gate(), RenderStats::eq8_gate). false:
   /// the estimator everywhere (to test the estimator itself, or to compare with it).
   bool gate = true;
   double seconds = 0;  ///< stop after the pass that crosses this time (0: no limit)

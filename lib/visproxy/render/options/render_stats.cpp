@@ -34,6 +34,7 @@ nlohmann::json RenderStats::to_json() const {
           {"optimal_probabilities", optimal_probabilities},
           {"learned_costs", learned_costs},
           {"disk_gate", disk_gate},
+          {"eq8_gate", eq8_gate},
           {"stochastic_terms",
            {{"a_proxy_only", eq8.terms[0]},
             {"b_mesh_if_proxy_hit", eq8.terms[1]},

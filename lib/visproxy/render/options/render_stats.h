@@ -54,6 +54,9 @@ struct RenderStats {
   /// integrator with sphere sets): what the scene-level choice between the control variate
   /// and exact visibility weighed before the render; null otherwise.
   nlohmann::json disk_gate;
+  /// Adaptive eq. 8 with the VPL integrator: per instance, what the choice between eq. 8
+  /// and exact visibility for its points weighed before the render (Eq8Gate); null otherwise.
+  nlohmann::json eq8_gate;
   bool counted = false;               ///< the world was a counting one: the two below are set
   std::uint64_t traversal_steps = 0;  ///< BVH nodes visited by shadow queries (and probes)
   std::uint64_t primitive_tests = 0;  ///< triangles and balls tested by shadow queries

@@ -184,7 +184,18 @@ std::vector<ProxyKind> stochastic_kinds(const VisibilityContext& context);
 /// adaptive probabilities: the ray types seen by K probe segments from the point to the
 /// lights (rest of the scene: the own instance left out when splitting). With
 /// probe_passes > 0 the counts of the pixel's first passes are kept in `pixel_counts` and
-/// returned in later passes without probing.
+/// returned in later passes without probing. A scene without area lights (VPLs given by
+/// the caller) has nothing to probe: the counts stay empty.
 RayTypeCounts adaptive_probe_counts(const VisibilityContext& context, const ShadingPoint& point, RayTypeCounts* pixel_counts);
+
+/// Eq. 8's probabilities at a shading point whose rest of the scene has proxies of `kind`,
+/// as the options choose them (equal, optimal, or adaptive from the point's probe segments,
+/// counted as adaptive_probe_counts() counts them): for segments to lights, and for
+/// connections, which use the general form.
+struct Eq8Probabilities {
+  Probabilities to_light, connection;
+};
+Eq8Probabilities eq8_point_probabilities(const VisibilityContext& context, ProxyKind kind, const ShadingPoint& point,
+                                         RayTypeCounts* pixel_counts);
 
 }  // namespace visproxy
