@@ -848,5 +848,49 @@ TEST(VplIntegrator, AdaptiveEq8GateKeepsEq8WhereItPays) {
   EXPECT_EQ(gated.stats.eq8.traced_exactly, gated.stats.exact_tests);
 }
 
+// Given VPLs and no area light (a caller's own lights through the runtime API): every
+// strategy, estimator, way of choosing probabilities and gate renders a finite image with
+// the VPL integrator (lightcuts refuses all but exact visibility); none may read the empty
+// list of area lights.
+TEST(VplIntegrator, EveryModeRendersGivenVplsWithoutAreaLights) {
+  const DiskScene s = disk_scene();
+  const RenderWorld world(s.scene, s.proxies);
+  RenderOptions base{.integrator = IntegratorKind::vpl, .spp = 3, .seed = 2, .virtual_point_lights = &s.lights};
+  const Image exact = render(s.scene, world, base).image;
+  ASSERT_TRUE(all_finite(exact));
+  std::size_t rendered = 0;
+  for (const IntegratorKind integrator : {IntegratorKind::vpl, IntegratorKind::lightcuts})
+    for (const VisibilityMode visibility : {VisibilityMode::exact, VisibilityMode::bounds, VisibilityMode::spheres, VisibilityMode::stochastic})
+      for (const StochasticEstimator estimator : {StochasticEstimator::term_choice, StochasticEstimator::control_variate})
+        for (const ProbabilityMode probabilities :
+             {ProbabilityMode::equal, ProbabilityMode::adaptive, ProbabilityMode::learned, ProbabilityMode::optimal})
+          for (const bool gate : {true, false}) {
+            RenderOptions options = base;
+            options.integrator = integrator, options.visibility = visibility, options.estimator = estimator;
+            options.probabilities = probabilities, options.gate = gate;
+            const std::string label = std::string(name_of(integrator)) + " " + std::string(name_of(visibility)) + " " +
+                                      std::string(name_of(estimator)) + " " + std::string(name_of(probabilities)) +
+                                      (gate ? "" : " --no-gate");
+            try {
+              const RenderResult r = render(s.scene, world, options);
+              EXPECT_TRUE(all_finite(r.image)) << label;
+              EXPECT_EQ(r.image.pixels.size(), exact.pixels.size()) << label;
+              ++rendered;
+            } catch (const Error& error) {
+              // Refused only where the options contradict each other: lightcuts with any
+              // strategy but exact, eq. 8 with learned probabilities, the control variate
+              // with optimal ones.
+              const bool contradictory =
+                  (integrator == IntegratorKind::lightcuts && visibility != VisibilityMode::exact) ||
+                  (visibility == VisibilityMode::stochastic &&
+                   ((estimator == StochasticEstimator::term_choice && probabilities == ProbabilityMode::learned) ||
+                    (estimator == StochasticEstimator::control_variate && probabilities == ProbabilityMode::optimal)));
+              EXPECT_TRUE(contradictory) << label << ": " << error.what();
+              EXPECT_FALSE(std::string(error.what()).empty()) << label;
+            }
+          }
+  EXPECT_GE(rendered, 64u);
+}
+
 }  // namespace
 }  // namespace visproxy
