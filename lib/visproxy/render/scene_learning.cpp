@@ -473,7 +473,7 @@ class Eq8GateProbe final : public PointVisibility {
   void begin(const ShadingPoint& point) override {
     point_ = point;
     first_ = records_.size();
-    if (point.pass == 0) pixel_probes_ = RayTypeCounts{};  // a new pair's pixel
+    if (point.pixel != pixel_) pixel_probes_ = RayTypeCounts{}, pixel_ = point.pixel;  // a new pair's pixel
     const std::uint64_t probes_before = point.stats->probe_rays;
     const ProxyKind kind = kinds_[static_cast<std::size_t>(point.hit->instance)];
     probabilities.push_back(
@@ -529,7 +529,8 @@ class Eq8GateProbe final : public PointVisibility {
   std::vector<Eq8GateRecord>& records_;
   std::size_t first_ = 0;
   ShadingPoint point_;
-  RayTypeCounts pixel_probes_;
+  RayTypeCounts pixel_probes_;  // the probes' counts in the pixel of pixel_, as the render keeps them
+  std::size_t pixel_ = std::numeric_limits<std::size_t>::max();
   double probes_ = 0, point_work_ = 0;
 };
 
