@@ -164,6 +164,12 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
     modes.push_back({.integrator = IntegratorKind::vpl, .visibility = visibility, .probabilities = ProbabilityMode::learned,
                      .estimator = StochasticEstimator::control_variate, .spp = 2, .shadow_rays = 1, .seed = 11, .vpls = 48,
                      .bounces = 2});
+  // Adaptive eq. 8 with VPLs, through its gate and without it.
+  for (const bool gate : {true, false}) {
+    modes.push_back({.integrator = IntegratorKind::vpl, .visibility = VisibilityMode::stochastic, .probabilities = ProbabilityMode::adaptive,
+                     .probe_rays = 4, .probe_passes = 1, .spp = 2, .shadow_rays = 1, .seed = 11, .vpls = 48, .bounces = 2});
+    modes.back().gate = gate;
+  }
   for (const RenderOptions& options : modes) {
     const RenderResult many = render(s.scene, world, options);
     RenderResult one;
@@ -172,7 +178,7 @@ TEST(Renderer, EveryModeIsIndependentOfTheThreads) {
       one = render(s.scene, world, options);
     }
     EXPECT_EQ(many.image.pixels, one.image.pixels) << name_of(options.integrator) << " " << name_of(options.visibility) << " "
-                                                    << name_of(options.probabilities);
+                                                    << name_of(options.probabilities) << (options.gate ? "" : " --no-gate");
     EXPECT_EQ(many.stats.to_json(), [&] {
       nlohmann::json j = one.stats.to_json();
       j["seconds"] = many.stats.seconds;
